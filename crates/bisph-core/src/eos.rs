@@ -1,0 +1,144 @@
+//! Equations of state `p(rho)` and the exact specific compression energy `e(rho)`
+//! with `de/drho = p / rho^2` and `e(rho0) = 0`.
+
+/// Equation of state of the weakly compressible fluid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Eos {
+    /// Paper 1, eq 3: `p = p0 + c0^2 (rho - rho0)`.
+    Linear {
+        /// Reference density `rho0`.
+        rho0: f64,
+        /// Speed of sound `c0`.
+        c0: f64,
+        /// Background pressure `p0`.
+        p0: f64,
+    },
+    /// Paper 3, eq 15 (Tait): `p = p0 + rho0 c0^2 / xi ((rho/rho0)^xi - 1)`.
+    Tait {
+        /// Reference density `rho0`.
+        rho0: f64,
+        /// Speed of sound `c0` at `rho0`.
+        c0: f64,
+        /// Background pressure `p0`.
+        p0: f64,
+        /// Exponent `xi` (7 for water).
+        xi: f64,
+    },
+}
+
+impl Eos {
+    /// Reference density.
+    pub fn rho0(&self) -> f64 {
+        match *self {
+            Eos::Linear { rho0, .. } | Eos::Tait { rho0, .. } => rho0,
+        }
+    }
+
+    /// Reference speed of sound.
+    pub fn c0(&self) -> f64 {
+        match *self {
+            Eos::Linear { c0, .. } | Eos::Tait { c0, .. } => c0,
+        }
+    }
+
+    /// Pressure at density `rho`.
+    #[inline(always)]
+    pub fn pressure(&self, rho: f64) -> f64 {
+        match *self {
+            Eos::Linear { rho0, c0, p0 } => p0 + c0 * c0 * (rho - rho0),
+            Eos::Tait { rho0, c0, p0, xi } => {
+                p0 + rho0 * c0 * c0 / xi * ((rho / rho0).powf(xi) - 1.0)
+            }
+        }
+    }
+
+    /// Density at pressure `p` (inverse of [`Eos::pressure`]); `None` where no density gives `p`.
+    pub fn density(&self, p: f64) -> Option<f64> {
+        let rho = match *self {
+            Eos::Linear { rho0, c0, p0 } => rho0 + (p - p0) / (c0 * c0),
+            Eos::Tait { rho0, c0, p0, xi } => {
+                let base = 1.0 + xi * (p - p0) / (rho0 * c0 * c0);
+                if base <= 0.0 {
+                    return None;
+                }
+                rho0 * base.powf(1.0 / xi)
+            }
+        };
+        (rho > 0.0 && rho.is_finite()).then_some(rho)
+    }
+
+    /// Specific internal (compression) energy `e(rho) = int_{rho0}^{rho} p / r^2 dr`.
+    ///
+    /// Linear: `e = c0^2 (rho0/rho - 1 + ln(rho/rho0)) + p0 (1/rho0 - 1/rho)`.
+    /// Tait, with `B = rho0 c0^2 / xi`:
+    /// `e = B [((rho/rho0)^(xi-1) - 1) / ((xi-1) rho0) + 1/rho - 1/rho0] + p0 (1/rho0 - 1/rho)`.
+    pub fn specific_energy(&self, rho: f64) -> f64 {
+        match *self {
+            Eos::Linear { rho0, c0, p0 } => {
+                c0 * c0 * (rho0 / rho - 1.0 + (rho / rho0).ln()) + p0 * (1.0 / rho0 - 1.0 / rho)
+            }
+            Eos::Tait { rho0, c0, p0, xi } => {
+                let b = rho0 * c0 * c0 / xi;
+                b * (((rho / rho0).powf(xi - 1.0) - 1.0) / ((xi - 1.0) * rho0) + 1.0 / rho
+                    - 1.0 / rho0)
+                    + p0 * (1.0 / rho0 - 1.0 / rho)
+            }
+        }
+    }
+
+    /// Sound speed at density `rho`, `sqrt(dp/drho)`.
+    pub fn sound_speed(&self, rho: f64) -> f64 {
+        match *self {
+            Eos::Linear { c0, .. } => c0,
+            Eos::Tait { rho0, c0, xi, .. } => c0 * (rho / rho0).powf(0.5 * (xi - 1.0)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(eos: Eos) {
+        let rho0 = eos.rho0();
+        assert_eq!(eos.specific_energy(rho0), 0.0);
+        for f in [0.97, 0.999, 1.0, 1.003, 1.05] {
+            let rho = rho0 * f;
+            let d = 1e-6 * rho0;
+            let de = (eos.specific_energy(rho + d) - eos.specific_energy(rho - d)) / (2.0 * d);
+            let expected = eos.pressure(rho) / (rho * rho);
+            assert!(
+                (de - expected).abs() < 1e-6 * (1.0 + expected.abs()),
+                "{eos:?} {f}"
+            );
+            let back = eos.density(eos.pressure(rho)).unwrap();
+            assert!((back - rho).abs() < 1e-9 * rho0);
+        }
+    }
+
+    #[test]
+    fn energy_derivative_is_p_over_rho_squared() {
+        check(Eos::Linear {
+            rho0: 1000.0,
+            c0: 20.0,
+            p0: 0.0,
+        });
+        check(Eos::Linear {
+            rho0: 1.0,
+            c0: 1.0,
+            p0: 0.015,
+        });
+        check(Eos::Tait {
+            rho0: 998.0,
+            c0: 30.0,
+            p0: 0.0,
+            xi: 7.0,
+        });
+        check(Eos::Tait {
+            rho0: 1.0,
+            c0: 2.0,
+            p0: 0.5,
+            xi: 7.0,
+        });
+    }
+}

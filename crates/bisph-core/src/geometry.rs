@@ -1,0 +1,262 @@
+//! Set-up geometry: walls split into boundary elements, fluid blocks filled on a lattice.
+//!
+//! Orientation rule for 2-D polylines: the normal of a segment from `a` to `b` points to the
+//! **right** of the direction of travel, `(b - a)^perp = (dy, -dx) / L`. A polygon listed
+//! counter-clockwise around the fluid therefore has normals out of the fluid.
+
+use crate::dim::Vector;
+use glam::{DVec2, DVec3};
+
+/// One boundary element before it is owned by a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ElementShape<V> {
+    /// Centre.
+    pub centre: V,
+    /// Unit normal (out of the fluid).
+    pub normal: V,
+    /// Area (length in 2-D).
+    pub area: f64,
+    /// Corner points (2 in 2-D, 4 for 3-D patches).
+    pub corners: Vec<V>,
+}
+
+/// Splits the segment `a -> b` into `max(1, round(L / dx))` equal elements.
+pub fn segment_elements(a: DVec2, b: DVec2, dx: f64) -> Vec<ElementShape<DVec2>> {
+    let d = b - a;
+    let length = d.length();
+    if length == 0.0 {
+        return Vec::new();
+    }
+    let n = ((length / dx).round() as usize).max(1);
+    let normal = DVec2::new(d.y, -d.x) / length;
+    (0..n)
+        .map(|k| {
+            let p0 = a + d * (k as f64 / n as f64);
+            let p1 = a + d * ((k + 1) as f64 / n as f64);
+            ElementShape {
+                centre: (p0 + p1) * 0.5,
+                normal,
+                area: length / n as f64,
+                corners: vec![p0, p1],
+            }
+        })
+        .collect()
+}
+
+/// Elements along a polyline (closed: the last point joins the first).
+pub fn polyline_elements(points: &[DVec2], closed: bool, dx: f64) -> Vec<ElementShape<DVec2>> {
+    let mut out = Vec::new();
+    for w in points.windows(2) {
+        out.extend(segment_elements(w[0], w[1], dx));
+    }
+    if closed && points.len() > 2 {
+        out.extend(segment_elements(points[points.len() - 1], points[0], dx));
+    }
+    out
+}
+
+/// Signed area of a polygon (positive when counter-clockwise).
+pub fn signed_area(points: &[DVec2]) -> f64 {
+    let n = points.len();
+    (0..n)
+        .map(|k| points[k].perp_dot(points[(k + 1) % n]))
+        .sum::<f64>()
+        * 0.5
+}
+
+/// The four sides of a 2-D box, in counter-clockwise order: `-y`, `+x`, `+y`, `-x`.
+pub const BOX_SIDES_2D: [&str; 4] = ["-y", "+x", "+y", "-x"];
+
+/// Walls of a 2-D box enclosing the fluid, without the sides named in `open`
+/// (from [`BOX_SIDES_2D`]); normals point out of the box.
+pub fn box_elements_2d(
+    min: DVec2,
+    max: DVec2,
+    open: &[String],
+    dx: f64,
+) -> Vec<ElementShape<DVec2>> {
+    let corners = [min, DVec2::new(max.x, min.y), max, DVec2::new(min.x, max.y)];
+    let mut out = Vec::new();
+    for (k, side) in BOX_SIDES_2D.iter().enumerate() {
+        if !open.iter().any(|o| o == side) {
+            out.extend(segment_elements(corners[k], corners[(k + 1) % 4], dx));
+        }
+    }
+    out
+}
+
+/// Splits the parallelogram `origin + a e1 + b e2` (`a, b` in `[0, 1]`) into patches of side
+/// about `dx`, with the given unit normal.
+pub fn rectangle_elements(
+    origin: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    normal: DVec3,
+    dx: f64,
+) -> Vec<ElementShape<DVec3>> {
+    let n1 = ((e1.length() / dx).round() as usize).max(1);
+    let n2 = ((e2.length() / dx).round() as usize).max(1);
+    let area = e1.cross(e2).length() / (n1 * n2) as f64;
+    let mut out = Vec::with_capacity(n1 * n2);
+    for b in 0..n2 {
+        for a in 0..n1 {
+            let p = |i: usize, k: usize| {
+                origin + e1 * (i as f64 / n1 as f64) + e2 * (k as f64 / n2 as f64)
+            };
+            let corners = vec![p(a, b), p(a + 1, b), p(a + 1, b + 1), p(a, b + 1)];
+            let centre = (corners[0] + corners[2]) * 0.5;
+            out.push(ElementShape {
+                centre,
+                normal,
+                area,
+                corners,
+            });
+        }
+    }
+    out
+}
+
+/// The six faces of a 3-D box: `-x`, `+x`, `-y`, `+y`, `-z`, `+z`.
+pub const BOX_FACES_3D: [&str; 6] = ["-x", "+x", "-y", "+y", "-z", "+z"];
+
+/// Walls of a 3-D box enclosing the fluid, without the faces named in `open` (from
+/// [`BOX_FACES_3D`]); square-ish patches of about `dx^2`, normals out of the box.
+pub fn box_elements_3d(
+    min: DVec3,
+    max: DVec3,
+    open: &[String],
+    dx: f64,
+) -> Vec<ElementShape<DVec3>> {
+    let size = max - min;
+    let mut out = Vec::new();
+    for (k, face) in BOX_FACES_3D.iter().enumerate() {
+        if open.iter().any(|o| o == face) {
+            continue;
+        }
+        let axis = k / 2;
+        let upper = k % 2 == 1;
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut origin = min;
+        if upper {
+            origin[axis] = max[axis];
+        }
+        let mut e1 = DVec3::ZERO;
+        e1[u] = size[u];
+        let mut e2 = DVec3::ZERO;
+        e2[v] = size[v];
+        let mut normal = DVec3::ZERO;
+        normal[axis] = if upper { 1.0 } else { -1.0 };
+        out.extend(rectangle_elements(origin, e1, e2, normal, dx));
+    }
+    out
+}
+
+/// Lattice points `min + (k + 1/2) dx` inside the box `[min, max]`.
+pub fn lattice_box<V: Vector>(min: V, max: V, dx: f64) -> Vec<V> {
+    let mut counts = [1usize; 3];
+    for (k, c) in counts.iter_mut().enumerate().take(V::DIM) {
+        let n = ((max.get(k) - min.get(k)) / dx + 1e-9).floor();
+        *c = if n > 0.0 { n as usize } else { 0 };
+    }
+    let mut out = Vec::with_capacity(counts.iter().product());
+    for c in 0..counts[2] {
+        for b in 0..counts[1] {
+            for a in 0..counts[0] {
+                let idx = [a, b, c];
+                let mut p = min;
+                for (k, &i) in idx.iter().enumerate().take(V::DIM) {
+                    p.set(k, min.get(k) + (i as f64 + 0.5) * dx);
+                }
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// Winding number of the closed polygon `points` around `p` (non-zero means inside).
+pub fn winding_number(p: DVec2, points: &[DVec2]) -> i32 {
+    let n = points.len();
+    let mut wn = 0;
+    for k in 0..n {
+        let (a, b) = (points[k], points[(k + 1) % n]);
+        let side = (b - a).perp_dot(p - a);
+        if a.y <= p.y {
+            if b.y > p.y && side > 0.0 {
+                wn += 1;
+            }
+        } else if b.y <= p.y && side < 0.0 {
+            wn -= 1;
+        }
+    }
+    wn
+}
+
+/// Lattice points of spacing `dx` (aligned on the polygon's bounding box) inside the polygon.
+pub fn lattice_polygon(points: &[DVec2], dx: f64) -> Vec<DVec2> {
+    if points.len() < 3 {
+        return Vec::new();
+    }
+    let (mut lo, mut hi) = (points[0], points[0]);
+    for &p in points {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    lattice_box(lo, hi, dx)
+        .into_iter()
+        .filter(|&p| winding_number(p, points) != 0)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_walls_have_outward_normals_and_the_right_perimeter() {
+        let els = box_elements_2d(DVec2::ZERO, DVec2::new(2.0, 1.0), &[], 0.1);
+        let total: f64 = els.iter().map(|e| e.area).sum();
+        assert!((total - 6.0).abs() < 1e-12);
+        let centre = DVec2::new(1.0, 0.5);
+        assert!(els.iter().all(|e| (e.centre - centre).dot(e.normal) > 0.0));
+        let closed_sum: DVec2 = els.iter().map(|e| e.normal * e.area).sum();
+        assert!(closed_sum.length() < 1e-12);
+        let open = box_elements_2d(DVec2::ZERO, DVec2::new(2.0, 1.0), &["+y".into()], 0.1);
+        assert_eq!(open.len(), els.len() - 20);
+    }
+
+    #[test]
+    fn box_faces_are_closed_and_outward() {
+        let els = box_elements_3d(DVec3::ZERO, DVec3::new(1.0, 0.5, 0.3), &[], 0.1);
+        let area: f64 = els.iter().map(|e| e.area).sum();
+        assert!((area - 2.0 * (0.5 + 0.3 + 0.15)).abs() < 1e-12);
+        let flux: DVec3 = els.iter().map(|e| e.normal * e.area).sum();
+        assert!(flux.length() < 1e-12);
+        let c = DVec3::new(0.5, 0.25, 0.15);
+        assert!(els.iter().all(|e| (e.centre - c).dot(e.normal) > 0.0));
+    }
+
+    #[test]
+    fn polygon_fill_matches_box_fill() {
+        let square = [
+            DVec2::ZERO,
+            DVec2::new(1.0, 0.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(0.0, 1.0),
+        ];
+        assert!(signed_area(&square) > 0.0);
+        let a = lattice_polygon(&square, 0.1);
+        let b = lattice_box(DVec2::ZERO, DVec2::ONE, 0.1);
+        assert_eq!(a, b);
+        assert_eq!(b.len(), 100);
+        let tri = [DVec2::ZERO, DVec2::new(1.0, 0.0), DVec2::new(0.0, 0.95)];
+        let inside: Vec<DVec2> = b
+            .iter()
+            .copied()
+            .filter(|p| p.x + p.y / 0.95 < 1.0)
+            .collect();
+        assert_eq!(lattice_polygon(&tri, 0.1), inside);
+        let clockwise: Vec<DVec2> = tri.iter().rev().copied().collect();
+        assert_eq!(lattice_polygon(&clockwise, 0.1), inside);
+    }
+}

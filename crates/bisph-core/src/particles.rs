@@ -1,0 +1,93 @@
+//! Fluid particles as a struct of arrays.
+
+use crate::dim::Vector;
+
+/// State and rates of the fluid particles (struct of arrays, one entry per particle).
+///
+/// Particles are reordered by cell for memory locality; `id` keeps each particle's original
+/// index so outputs and diagnostics can name it.
+#[derive(Clone, Debug, Default)]
+pub struct Fluid<V: Vector> {
+    /// Original index of each particle (stable across reorderings).
+    pub id: Vec<u32>,
+    /// Positions `r_i`.
+    pub position: Vec<V>,
+    /// Velocities `u_i`.
+    pub velocity: Vec<V>,
+    /// Densities `rho_i`.
+    pub density: Vec<f64>,
+    /// Masses `m_i` (constant in time).
+    pub mass: Vec<f64>,
+    /// Pressures `p_i = p(rho_i)`, refreshed from the equation of state before each rate sweep.
+    pub pressure: Vec<f64>,
+    /// Accelerations `du_i/dt` from the last rate evaluation.
+    pub acceleration: Vec<V>,
+    /// Density rates `drho_i/dt` from the last rate evaluation.
+    pub density_rate: Vec<f64>,
+}
+
+impl<V: Vector> Fluid<V> {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// `true` when there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// Appends a particle at rest with zero rates.
+    pub fn push(&mut self, position: V, velocity: V, density: f64, mass: f64, pressure: f64) {
+        self.id.push(self.position.len() as u32);
+        self.position.push(position);
+        self.velocity.push(velocity);
+        self.density.push(density);
+        self.mass.push(mass);
+        self.pressure.push(pressure);
+        self.acceleration.push(V::ZERO);
+        self.density_rate.push(0.0);
+    }
+
+    /// Reorders every array so that new entry `k` is old entry `order[k]`.
+    pub fn permute(&mut self, order: &[u32], scratch: &mut PermuteScratch<V>) {
+        permute_into(&mut self.id, order, &mut scratch.ids);
+        permute_into(&mut self.position, order, &mut scratch.vectors);
+        permute_into(&mut self.velocity, order, &mut scratch.vectors);
+        permute_into(&mut self.acceleration, order, &mut scratch.vectors);
+        permute_into(&mut self.density, order, &mut scratch.scalars);
+        permute_into(&mut self.mass, order, &mut scratch.scalars);
+        permute_into(&mut self.pressure, order, &mut scratch.scalars);
+        permute_into(&mut self.density_rate, order, &mut scratch.scalars);
+    }
+}
+
+/// Reusable buffers for [`Fluid::permute`], so reordering allocates nothing per step.
+#[derive(Debug, Default)]
+pub struct PermuteScratch<V> {
+    ids: Vec<u32>,
+    vectors: Vec<V>,
+    scalars: Vec<f64>,
+}
+
+fn permute_into<T: Copy>(data: &mut Vec<T>, order: &[u32], scratch: &mut Vec<T>) {
+    scratch.clear();
+    scratch.extend(order.iter().map(|&k| data[k as usize]));
+    std::mem::swap(data, scratch);
+}
+
+/// A read-only view of the fluid state at which rates are evaluated (the integrator may
+/// evaluate at predicted velocities and densities, not the stored ones).
+#[derive(Clone, Copy, Debug)]
+pub struct FluidState<'a, V> {
+    /// Positions.
+    pub position: &'a [V],
+    /// Velocities.
+    pub velocity: &'a [V],
+    /// Densities.
+    pub density: &'a [f64],
+    /// Masses.
+    pub mass: &'a [f64],
+    /// Pressures (from the densities by the equation of state).
+    pub pressure: &'a [f64],
+}

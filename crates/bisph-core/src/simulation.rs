@@ -1,0 +1,405 @@
+//! A simulation: fluid, walls and the chosen models, advanced step by step.
+//!
+//! Time integration (explicit, second order, one rate evaluation per step; velocity Verlet
+//! in kick-drift-kick form extended to the density):
+//! 1. `u* = u^n + dt/2 a^n`, `rho* = rho^n + dt/2 rhodot^n`, `r^{n+1} = r^n + dt u*`;
+//! 2. walls to `t^{n+1}`; rates `a^{n+1}, rhodot^{n+1}` at `r^{n+1}` and the predicted
+//!    `u* + dt/2 a^n`, `rho* + dt/2 rhodot^n`;
+//! 3. `u^{n+1} = u* + dt/2 a^{n+1}`, `rho^{n+1} = rho* + dt/2 rhodot^{n+1}`.
+//!
+//! The wall work is integrated with the trapezoidal rule of the same step.
+
+use crate::dim::Vector;
+use crate::energy::{fluid_energies, EnergyBudget};
+use crate::eos::Eos;
+use crate::error::SimError;
+use crate::kernel::Wendland;
+use crate::neighbours::CellGrid;
+use crate::particles::{Fluid, FluidState, PermuteScratch};
+use crate::probes::Probe;
+use crate::terms::{compute_rates, DensityDiffusion, RateModel};
+use crate::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
+use crate::walls::Walls;
+use rayon::prelude::*;
+
+/// Which wall model a case uses (chosen once; the sweep is monomorphised for it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum WallModelChoice {
+    /// Energy-conserving boundary integrals (paper 1). The default.
+    #[default]
+    Energy,
+}
+
+/// Parameters of a simulation.
+#[derive(Clone, Debug)]
+pub struct SimConfig<V: Vector> {
+    /// The kernel (its `h` sets the support `2h`).
+    pub kernel: Wendland,
+    /// Equation of state.
+    pub eos: Eos,
+    /// Gravity.
+    pub gravity: V,
+    /// delta-SPH coefficient `delta` (0 = off).
+    pub delta: f64,
+    /// Use the hydrostatic correction in delta-SPH.
+    pub delta_hydrostatic: bool,
+    /// Courant number `Co`: `dt = Co min(h / c0, sqrt(h / max|a|))`.
+    pub courant: f64,
+    /// Fixed time step (overrides the Courant rule).
+    pub fixed_dt: Option<f64>,
+    /// Smallest allowed time step (the run stops below it).
+    pub min_dt: f64,
+    /// Lower corner of the domain; a particle outside stops the run.
+    pub domain_min: V,
+    /// Upper corner of the domain.
+    pub domain_max: V,
+    /// Wall model.
+    pub wall_model: WallModelChoice,
+    /// Reorder particles by cell every this many steps (0 = never).
+    pub reorder_interval: u64,
+}
+
+/// Scratch buffers reused every step.
+#[derive(Debug, Default)]
+struct Scratch<V> {
+    velocity: Vec<V>,
+    density: Vec<f64>,
+    permute: PermuteScratch<V>,
+}
+
+/// The state of a running simulation.
+#[derive(Debug)]
+pub struct Simulation<V: Vector> {
+    /// Parameters.
+    pub config: SimConfig<V>,
+    /// Fluid particles.
+    pub fluid: Fluid<V>,
+    /// Walls and bodies.
+    pub walls: Walls<V>,
+    /// Probes.
+    pub probes: Vec<Probe<V>>,
+    /// Current time.
+    pub time: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// Size of the last step.
+    pub last_dt: f64,
+    /// Cumulative work of the fluid on walls, `int sum_j F_j . U_j dt`.
+    pub wall_work: f64,
+    /// Wall power at the last rate evaluation.
+    pub wall_power: f64,
+    /// Cell grid over the fluid particles.
+    pub fluid_grid: CellGrid<V>,
+    scratch: Scratch<V>,
+}
+
+impl<V: Vector> Simulation<V> {
+    /// Sets up a simulation and evaluates the rates at time zero.
+    pub fn new(
+        config: SimConfig<V>,
+        fluid: Fluid<V>,
+        walls: Walls<V>,
+        probes: Vec<Probe<V>>,
+    ) -> Self {
+        let cell = config.kernel.support;
+        let mut sim = Simulation {
+            config,
+            fluid,
+            walls,
+            probes,
+            time: 0.0,
+            step: 0,
+            last_dt: 0.0,
+            wall_work: 0.0,
+            wall_power: 0.0,
+            fluid_grid: CellGrid::new(cell),
+            scratch: Scratch::default(),
+        };
+        sim.walls.grid = CellGrid::new(cell);
+        sim.walls.grid.rebuild(&sim.walls.elements.centre);
+        sim.walls.move_to(0.0);
+        sim.rebuild_grid(true);
+        sim.scratch.velocity = sim.fluid.velocity.clone();
+        sim.scratch.density = sim.fluid.density.clone();
+        sim.evaluate_rates();
+        sim.refresh_pressure();
+        sim
+    }
+
+    /// The rate model handed to the sweep.
+    pub fn rate_model(&self) -> RateModel<V> {
+        let c = &self.config;
+        let c0 = c.eos.c0();
+        let hydrostatic_gradient = if c.delta_hydrostatic {
+            c.gravity * (-c.eos.rho0() / (c0 * c0))
+        } else {
+            V::ZERO
+        };
+        RateModel {
+            kernel: c.kernel,
+            gravity: c.gravity,
+            diffusion: DensityDiffusion {
+                scale: c.delta * c.kernel.h * c0,
+                hydrostatic_gradient,
+            },
+        }
+    }
+
+    fn rebuild_grid(&mut self, reorder: bool) {
+        self.fluid_grid.rebuild(&self.fluid.position);
+        if reorder {
+            let order = self.fluid_grid.sorted_items().to_vec();
+            self.fluid.permute(&order, &mut self.scratch.permute);
+            self.fluid_grid.rebuild(&self.fluid.position);
+        }
+    }
+
+    /// Pressures from the stored densities.
+    fn refresh_pressure(&mut self) {
+        let eos = self.config.eos;
+        self.fluid
+            .pressure
+            .par_iter_mut()
+            .zip(self.fluid.density.par_iter())
+            .for_each(|(p, &rho)| *p = eos.pressure(rho));
+    }
+
+    /// Rates at the positions in `fluid`, the velocities and densities in the scratch buffers;
+    /// also refreshes the wall pressures and the wall power.
+    fn evaluate_rates(&mut self) {
+        let eos = self.config.eos;
+        let model = self.rate_model();
+        let Fluid {
+            position,
+            mass,
+            pressure,
+            acceleration,
+            density_rate,
+            ..
+        } = &mut self.fluid;
+        pressure
+            .par_iter_mut()
+            .zip(self.scratch.density.par_iter())
+            .for_each(|(p, &rho)| *p = eos.pressure(rho));
+        let state = FluidState {
+            position,
+            velocity: &self.scratch.velocity,
+            density: &self.scratch.density,
+            mass,
+            pressure,
+        };
+        match self.config.wall_model {
+            WallModelChoice::Energy => compute_rates(
+                &model,
+                &EnergyConservingWalls,
+                &state,
+                &self.fluid_grid,
+                &self.walls.elements,
+                &self.walls.grid,
+                acceleration,
+                density_rate,
+            ),
+        }
+        wall_pressure(
+            &model.kernel,
+            &mut self.walls.elements,
+            &state,
+            &self.fluid_grid,
+        );
+        self.wall_power = self.walls.power();
+    }
+
+    /// Time step for the next step: fixed, or `Co min(h / c0, sqrt(h / max|a|))`.
+    pub fn next_dt(&self) -> f64 {
+        if let Some(dt) = self.config.fixed_dt {
+            return dt;
+        }
+        let h = self.config.kernel.h;
+        let a_max = self
+            .fluid
+            .acceleration
+            .par_iter()
+            .map(|a| a.length_squared())
+            .reduce(|| 0.0, f64::max)
+            .sqrt();
+        let mut dt = h / self.config.eos.c0();
+        if a_max > 0.0 {
+            dt = dt.min((h / a_max).sqrt());
+        }
+        self.config.courant * dt
+    }
+
+    /// Advances one step of size `next_dt()` (never past `t_end` when given).
+    pub fn advance(&mut self, t_end: Option<f64>) -> Result<(), SimError> {
+        let mut dt = self.next_dt();
+        if let Some(end) = t_end {
+            if self.time + dt > end && end > self.time {
+                dt = end - self.time;
+            }
+        }
+        if !(dt >= self.config.min_dt) {
+            return Err(SimError::TimeStepCollapse {
+                dt,
+                step: self.step,
+                time: self.time,
+            });
+        }
+        let half = 0.5 * dt;
+        // 1. kick and drift.
+        {
+            let f = &mut self.fluid;
+            f.velocity
+                .par_iter_mut()
+                .zip(f.position.par_iter_mut())
+                .zip(f.acceleration.par_iter())
+                .for_each(|((u, r), &a)| {
+                    *u += a * half;
+                    *r += *u * dt;
+                });
+            f.density
+                .par_iter_mut()
+                .zip(f.density_rate.par_iter())
+                .for_each(|(rho, &drho)| *rho += drho * half);
+        }
+        let power_before = self.wall_power;
+        self.time += dt;
+        self.step += 1;
+        self.last_dt = dt;
+        self.check_state()?;
+        // 2. walls, neighbours, rates at the predicted state.
+        self.walls.move_to(self.time);
+        let interval = self.config.reorder_interval;
+        self.rebuild_grid(interval > 0 && self.step % interval == 0);
+        {
+            let f = &self.fluid;
+            let s = &mut self.scratch;
+            s.velocity.clear();
+            s.velocity.extend(
+                f.velocity
+                    .iter()
+                    .zip(&f.acceleration)
+                    .map(|(&u, &a)| u + a * half),
+            );
+            s.density.clear();
+            s.density.extend(
+                f.density
+                    .iter()
+                    .zip(&f.density_rate)
+                    .map(|(&rho, &d)| rho + d * half),
+            );
+        }
+        self.evaluate_rates();
+        // 3. kick.
+        {
+            let f = &mut self.fluid;
+            f.velocity
+                .par_iter_mut()
+                .zip(f.acceleration.par_iter())
+                .for_each(|(u, &a)| *u += a * half);
+            f.density
+                .par_iter_mut()
+                .zip(f.density_rate.par_iter())
+                .for_each(|(rho, &drho)| *rho += drho * half);
+        }
+        self.wall_work += half * (power_before + self.wall_power);
+        self.refresh_pressure();
+        self.check_state()
+    }
+
+    /// Stops on the first particle (in memory order) with a non-finite state or outside the
+    /// domain.
+    fn check_state(&self) -> Result<(), SimError> {
+        let f = &self.fluid;
+        let (lo, hi) = (self.config.domain_min, self.config.domain_max);
+        let bad = (0..f.len()).into_par_iter().position_first(|i| {
+            let r = f.position[i];
+            let outside = (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k)));
+            outside
+                || !f.velocity[i].is_finite()
+                || !f.density[i].is_finite()
+                || !(f.density[i] > 0.0)
+        });
+        let Some(i) = bad else { return Ok(()) };
+        let (particle, step, time) = (f.id[i], self.step, self.time);
+        if !f.position[i].is_finite() {
+            return Err(SimError::NonFinite {
+                particle,
+                quantity: "position",
+                step,
+                time,
+            });
+        }
+        if !f.velocity[i].is_finite() {
+            return Err(SimError::NonFinite {
+                particle,
+                quantity: "velocity",
+                step,
+                time,
+            });
+        }
+        if !(f.density[i].is_finite() && f.density[i] > 0.0) {
+            return Err(SimError::NonFinite {
+                particle,
+                quantity: "density",
+                step,
+                time,
+            });
+        }
+        Err(SimError::LeftDomain {
+            particle,
+            position: f.position[i].to_xyz(),
+            step,
+            time,
+        })
+    }
+
+    /// The energy budget of the current state.
+    pub fn energy(&self) -> EnergyBudget {
+        let (kinetic, compressible, potential) =
+            fluid_energies(&self.fluid, &self.config.eos, self.config.gravity);
+        EnergyBudget {
+            kinetic,
+            compressible,
+            potential,
+            wall_work: self.wall_work,
+            total: kinetic + compressible + potential + self.wall_work,
+        }
+    }
+
+    /// Probe values for the current state.
+    pub fn sample_probes(&self) -> Vec<f64> {
+        self.probes
+            .iter()
+            .map(|p| p.sample(&self.config.kernel, &self.fluid, &self.fluid_grid))
+            .collect()
+    }
+
+    /// Number of fluid-fluid pairs within the support (each particle counts its neighbours,
+    /// itself included), for throughput figures.
+    pub fn count_pairs(&self) -> u64 {
+        let f = &self.fluid;
+        let support = self.config.kernel.support;
+        (0..f.len())
+            .into_par_iter()
+            .map(|i| {
+                let mut n = 0u64;
+                self.fluid_grid.for_each_neighbour(
+                    f.position[i],
+                    &f.position,
+                    support,
+                    |_, _, _| n += 1,
+                );
+                n
+            })
+            .sum()
+    }
+
+    /// Largest particle speed.
+    pub fn max_speed(&self) -> f64 {
+        self.fluid
+            .velocity
+            .iter()
+            .map(|u| u.length())
+            .fold(0.0, f64::max)
+    }
+}

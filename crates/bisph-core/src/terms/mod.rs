@@ -1,0 +1,117 @@
+//! Physical terms and the sweep that turns a fluid state into rates.
+//!
+//! Each term lives in its own file as a pair function; [`compute_rates`] fuses them into one
+//! gather loop per particle (each particle sums its own neighbours, so the result does not
+//! depend on the number of threads) and asks the wall model for the wall parts:
+//! - momentum, paper 1 eq 2: `du_i/dt = -(<grad p>_i^Omega + <grad p>_i^{dOmega}) / rho_i + g`;
+//! - continuity, paper 1 eq 1: `drho_i/dt = -rho_i (<div u>_i^Omega + <div u>_i^{dOmega}) + D_i`.
+
+pub mod density_diffusion;
+pub mod pressure_gradient;
+pub mod velocity_divergence;
+
+use crate::dim::Vector;
+use crate::kernel::Wendland;
+use crate::neighbours::CellGrid;
+use crate::particles::FluidState;
+use crate::walls::{BoundaryElements, WallModel};
+pub use density_diffusion::DensityDiffusion;
+use rayon::prelude::*;
+
+/// The operators of one particle, split into fluid and wall parts (for power bookkeeping).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Operators<V> {
+    /// `<grad p>_i^Omega` (eq 10).
+    pub pressure_gradient: V,
+    /// `<div u>_i^Omega` (eq 11).
+    pub velocity_divergence: f64,
+    /// `<grad p>_i^{dOmega}` from the wall model.
+    pub wall_pressure_gradient: V,
+    /// `<div u>_i^{dOmega}` from the wall model.
+    pub wall_velocity_divergence: f64,
+    /// Density diffusion `D_i`.
+    pub density_diffusion: f64,
+}
+
+/// What the sweep needs besides the state.
+#[derive(Clone, Copy, Debug)]
+pub struct RateModel<V: Vector> {
+    /// The kernel.
+    pub kernel: Wendland,
+    /// Gravity `g`.
+    pub gravity: V,
+    /// delta-SPH density diffusion.
+    pub diffusion: DensityDiffusion<V>,
+}
+
+/// Operators of particle `i` at the state `fluid`.
+#[inline(always)]
+pub fn particle_operators<V: Vector, W: WallModel<V>>(
+    model: &RateModel<V>,
+    wall_model: &W,
+    fluid: &FluidState<V>,
+    fluid_grid: &CellGrid<V>,
+    elements: &BoundaryElements<V>,
+    wall_grid: &CellGrid<V>,
+    i: usize,
+) -> Operators<V> {
+    let kernel = &model.kernel;
+    let (x_i, u_i, rho_i, p_i) = (
+        fluid.position[i],
+        fluid.velocity[i],
+        fluid.density[i],
+        fluid.pressure[i],
+    );
+    let mut grad_p = V::ZERO;
+    let mut div_u = 0.0;
+    let mut diffusion = 0.0;
+    let diffuse = model.diffusion.scale != 0.0;
+    fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
+        let f = kernel.gradient_factor(r);
+        let grad_w = r_ij * f;
+        let volume_j = fluid.mass[j] / fluid.density[j];
+        grad_p += pressure_gradient::pair(p_i, fluid.pressure[j], grad_w, volume_j);
+        div_u += velocity_divergence::pair(u_i, fluid.velocity[j], grad_w, volume_j);
+        if diffuse {
+            diffusion += model
+                .diffusion
+                .pair(rho_i, fluid.density[j], r_ij, f, volume_j);
+        }
+    });
+    let wall = wall_model.particle_terms(kernel, x_i, u_i, p_i, elements, wall_grid);
+    Operators {
+        pressure_gradient: grad_p,
+        velocity_divergence: div_u,
+        wall_pressure_gradient: wall.pressure_gradient,
+        wall_velocity_divergence: wall.velocity_divergence,
+        density_diffusion: diffusion,
+    }
+}
+
+/// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
+/// into `acceleration` and `density_rate`, in parallel.
+#[allow(clippy::too_many_arguments)]
+pub fn compute_rates<V: Vector, W: WallModel<V>>(
+    model: &RateModel<V>,
+    wall_model: &W,
+    fluid: &FluidState<V>,
+    fluid_grid: &CellGrid<V>,
+    elements: &BoundaryElements<V>,
+    wall_grid: &CellGrid<V>,
+    acceleration: &mut [V],
+    density_rate: &mut [f64],
+) {
+    acceleration
+        .par_iter_mut()
+        .zip(density_rate.par_iter_mut())
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, (a, drho))| {
+            let op =
+                particle_operators(model, wall_model, fluid, fluid_grid, elements, wall_grid, i);
+            let rho = fluid.density[i];
+            *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + model.gravity;
+            *drho = -rho * (op.velocity_divergence + op.wall_velocity_divergence)
+                + op.density_diffusion;
+        });
+}

@@ -1,0 +1,189 @@
+//! Walls as boundary elements, and the wall models that turn them into terms.
+//!
+//! **Normal convention (whole code):** element normals point **out of the fluid**, into the
+//! wall, as in paper 1. Paper 3 uses the opposite sign; convert at its edges.
+
+pub mod bodies;
+pub mod energy_bi;
+
+use crate::dim::Vector;
+use crate::kernel::Wendland;
+use crate::neighbours::CellGrid;
+pub use bodies::{Body, Kinematics, Motion, PrescribedMotion};
+
+/// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
+/// fluid, area (length in 2-D), velocity and owning body.
+#[derive(Clone, Debug, Default)]
+pub struct BoundaryElements<V: Vector> {
+    /// Current element centres `r_j`.
+    pub centre: Vec<V>,
+    /// Current unit normals `n_j`, out of the fluid.
+    pub normal: Vec<V>,
+    /// Areas `s_j` (lengths in 2-D).
+    pub area: Vec<f64>,
+    /// Velocities `U_j`.
+    pub velocity: Vec<V>,
+    /// Index of the owning body in [`Walls::bodies`].
+    pub body: Vec<u32>,
+    /// Wall pressure `P_j` (paper 1, eq 71), refreshed by [`energy_bi::wall_pressure`].
+    pub pressure: Vec<f64>,
+    /// Centres in the body's reference configuration (time zero).
+    pub reference_centre: Vec<V>,
+    /// Normals in the reference configuration.
+    pub reference_normal: Vec<V>,
+    /// Corner points of every element in the reference configuration (for output), flattened:
+    /// element `j` owns `reference_corners[corner_start[j]..corner_start[j + 1]]`.
+    pub reference_corners: Vec<V>,
+    /// Offsets into `reference_corners` (length = elements + 1).
+    pub corner_start: Vec<u32>,
+}
+
+impl<V: Vector> BoundaryElements<V> {
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.centre.len()
+    }
+
+    /// `true` when there are no elements.
+    pub fn is_empty(&self) -> bool {
+        self.centre.is_empty()
+    }
+
+    /// Appends a fixed-shape element at rest, owned by `body`, with its corner points.
+    pub fn push(&mut self, centre: V, normal: V, area: f64, body: u32, corners: &[V]) {
+        if self.corner_start.is_empty() {
+            self.corner_start.push(0);
+        }
+        self.centre.push(centre);
+        self.normal.push(normal);
+        self.area.push(area);
+        self.velocity.push(V::ZERO);
+        self.body.push(body);
+        self.pressure.push(0.0);
+        self.reference_centre.push(centre);
+        self.reference_normal.push(normal);
+        self.reference_corners.extend_from_slice(corners);
+        self.corner_start.push(self.reference_corners.len() as u32);
+    }
+
+    /// Corner points of element `j` in the reference configuration.
+    pub fn corners(&self, j: usize) -> &[V] {
+        &self.reference_corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize]
+    }
+}
+
+/// Walls: boundary elements, the bodies that own them and a cell grid over the elements.
+#[derive(Clone, Debug)]
+pub struct Walls<V: Vector> {
+    /// The boundary elements.
+    pub elements: BoundaryElements<V>,
+    /// Bodies; body 0 is the fixed walls.
+    pub bodies: Vec<Body<V>>,
+    /// Cell grid over the element centres.
+    pub grid: CellGrid<V>,
+}
+
+impl<V: Vector> Walls<V> {
+    /// Walls with the given elements and bodies (body 0 must exist).
+    pub fn new(elements: BoundaryElements<V>, bodies: Vec<Body<V>>, cell_size: f64) -> Self {
+        let mut walls = Walls {
+            elements,
+            bodies,
+            grid: CellGrid::new(cell_size),
+        };
+        walls.grid.rebuild(&walls.elements.centre);
+        walls
+    }
+
+    /// `true` when some body moves.
+    pub fn has_moving_bodies(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| !matches!(b.motion, Motion::Fixed))
+    }
+
+    /// Places every moving body at time `t`: element centres, normals and velocities
+    /// (`U_j = v + omega x (r_j - c)`), then rebuilds the element grid.
+    pub fn move_to(&mut self, t: f64) {
+        if !self.has_moving_bodies() {
+            return;
+        }
+        let kin: Vec<Kinematics<V>> = self.bodies.iter().map(|b| b.motion.kinematics(t)).collect();
+        let e = &mut self.elements;
+        for j in 0..e.centre.len() {
+            let b = e.body[j] as usize;
+            if matches!(self.bodies[b].motion, Motion::Fixed) {
+                continue;
+            }
+            let k = &kin[b];
+            let c = self.bodies[b].centre + k.displacement;
+            let arm = (e.reference_centre[j] - self.bodies[b].centre).rotated_by(k.rotation);
+            e.centre[j] = c + arm;
+            e.normal[j] = e.reference_normal[j].rotated_by(k.rotation);
+            e.velocity[j] = k.velocity + V::angular_cross(k.angular_velocity, arm);
+        }
+        self.grid.rebuild(&self.elements.centre);
+    }
+
+    /// Current corner points of element `j` (reference corners moved with its body).
+    pub fn current_corners(&self, j: usize, t: f64) -> Vec<V> {
+        let b = &self.bodies[self.elements.body[j] as usize];
+        let k = b.motion.kinematics(t);
+        self.elements
+            .corners(j)
+            .iter()
+            .map(|&p| b.centre + k.displacement + (p - b.centre).rotated_by(k.rotation))
+            .collect()
+    }
+
+    /// Pressure force `sum_j P_j n_j s_j` and torque about the body's current centre, per body
+    /// (paper 1, App. C, eqs 69-71). Summed in element order, so it does not depend on threads.
+    pub fn body_loads(&self, t: f64) -> Vec<(V, V::Angular)> {
+        let mut loads = vec![(V::ZERO, V::Angular::default()); self.bodies.len()];
+        let centres: Vec<V> = self
+            .bodies
+            .iter()
+            .map(|b| b.centre + b.motion.kinematics(t).displacement)
+            .collect();
+        let e = &self.elements;
+        for j in 0..e.len() {
+            let b = e.body[j] as usize;
+            let f = e.normal[j] * (e.pressure[j] * e.area[j]);
+            loads[b].0 += f;
+            loads[b].1 = loads[b].1 + (e.centre[j] - centres[b]).cross(f);
+        }
+        loads
+    }
+
+    /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`.
+    pub fn power(&self) -> f64 {
+        let e = &self.elements;
+        (0..e.len())
+            .map(|j| e.pressure[j] * e.area[j] * e.normal[j].dot(e.velocity[j]))
+            .sum()
+    }
+}
+
+/// Wall part of the two operators of one fluid particle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WallTerms<V> {
+    /// `<grad p>_i^{dOmega}`, added to the fluid pressure gradient.
+    pub pressure_gradient: V,
+    /// `<div u>_i^{dOmega}`, added to the fluid velocity divergence.
+    pub velocity_divergence: f64,
+}
+
+/// A wall model: supplies the wall part of the operators for a fluid particle and the wall
+/// pressure on each element. Physical terms ask it; they never test which model is active.
+pub trait WallModel<V: Vector>: Sync {
+    /// Wall terms for a fluid particle at `x` with velocity `u` and pressure `p`.
+    fn particle_terms(
+        &self,
+        kernel: &Wendland,
+        x: V,
+        u: V,
+        p: f64,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> WallTerms<V>;
+}
