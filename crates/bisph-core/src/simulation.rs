@@ -18,7 +18,10 @@ use crate::neighbours::CellGrid;
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{compute_rates, DensityDiffusion, RateModel};
-use crate::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
+use crate::walls::bounce::elastic_bounce;
+use crate::walls::energy_bi::EnergyConservingWalls;
+use crate::walls::shepard_bi::ShepardWalls;
+use crate::walls::WallModel;
 use crate::walls::Walls;
 use rayon::prelude::*;
 
@@ -28,6 +31,8 @@ pub enum WallModelChoice {
     /// Energy-conserving boundary integrals (paper 1). The default.
     #[default]
     Energy,
+    /// Classic boundary integrals with discrete Shepard renormalisation (paper 1, eqs 24-25).
+    ShepardBi,
 }
 
 /// Parameters of a simulation.
@@ -57,6 +62,8 @@ pub struct SimConfig<V: Vector> {
     pub wall_model: WallModelChoice,
     /// Reorder particles by cell every this many steps (0 = never).
     pub reorder_interval: u64,
+    /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
+    pub elastic_bounce: bool,
 }
 
 /// Scratch buffers reused every step.
@@ -64,6 +71,7 @@ pub struct SimConfig<V: Vector> {
 struct Scratch<V> {
     velocity: Vec<V>,
     density: Vec<f64>,
+    lost_energy: Vec<f64>,
     permute: PermuteScratch<V>,
 }
 
@@ -188,24 +196,16 @@ impl<V: Vector> Simulation<V> {
             mass,
             pressure,
         };
+        let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         match self.config.wall_model {
-            WallModelChoice::Energy => compute_rates(
-                &model,
-                &EnergyConservingWalls,
-                &state,
-                &self.fluid_grid,
-                &self.walls.elements,
-                &self.walls.grid,
-                acceleration,
-                density_rate,
-            ),
+            WallModelChoice::Energy => {
+                sweep(&model, &EnergyConservingWalls, &state, grid, walls, acceleration, density_rate)
+            }
+            WallModelChoice::ShepardBi => {
+                let bi = ShepardWalls { gravity: model.gravity };
+                sweep(&model, &bi, &state, grid, walls, acceleration, density_rate)
+            }
         }
-        wall_pressure(
-            &model.kernel,
-            &mut self.walls.elements,
-            &state,
-            &self.fluid_grid,
-        );
         self.wall_power = self.walls.power();
     }
 
@@ -245,17 +245,22 @@ impl<V: Vector> Simulation<V> {
             });
         }
         let half = 0.5 * dt;
-        // 1. kick and drift.
+        // 1. kick, bounce off walls, drift.
         {
             let f = &mut self.fluid;
-            f.velocity
-                .par_iter_mut()
-                .zip(f.position.par_iter_mut())
-                .zip(f.acceleration.par_iter())
-                .for_each(|((u, r), &a)| {
-                    *u += a * half;
-                    *r += *u * dt;
-                });
+            f.velocity.par_iter_mut().zip(f.acceleration.par_iter()).for_each(|(u, &a)| *u += a * half);
+            if self.config.elastic_bounce {
+                self.wall_work += elastic_bounce(
+                    &self.walls.elements,
+                    &self.walls.grid,
+                    &f.position,
+                    &f.mass,
+                    &mut f.velocity,
+                    dt,
+                    &mut self.scratch.lost_energy,
+                );
+            }
+            f.position.par_iter_mut().zip(f.velocity.par_iter()).for_each(|(r, &u)| *r += u * dt);
             f.density
                 .par_iter_mut()
                 .zip(f.density_rate.par_iter())
@@ -402,4 +407,18 @@ impl<V: Vector> Simulation<V> {
             .map(|u| u.length())
             .fold(0.0, f64::max)
     }
+}
+
+/// Wall pressures, then rates, for one wall model.
+fn sweep<V: Vector, W: WallModel<V>>(
+    model: &RateModel<V>,
+    wall_model: &W,
+    state: &FluidState<V>,
+    fluid_grid: &CellGrid<V>,
+    walls: &mut Walls<V>,
+    acceleration: &mut [V],
+    density_rate: &mut [f64],
+) {
+    wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
+    compute_rates(model, wall_model, state, fluid_grid, &walls.elements, &walls.grid, acceleration, density_rate);
 }

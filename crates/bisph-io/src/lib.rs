@@ -1,1 +1,15 @@
-pub fn x() {}
+//! # bisph-io
+//!
+//! Everything between bisph's physics and the outside world: the case-file schema with
+//! named errors, building a simulation from a case, VTK/CSV/JSON outputs, plots, and the run
+//! loop of `bisph run`.
+
+pub mod build;
+pub mod case;
+pub mod output;
+pub mod plot;
+pub mod runner;
+pub mod vtk;
+
+pub use case::{load_case, parse_case, Case, CaseError, LoadedCase};
+pub use runner::{run_case, Progress, RunError, Summary};

@@ -1,1 +1,112 @@
-fn main() {}
+//! `bisph`: the command line of the boundary-integral SPH solver.
+
+mod bench;
+
+use bisph_io::{load_case, run_case, Progress, RunError};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "bisph", version, about = "Boundary-integral SPH solver")]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a case (the built-in 2-D dam break when no case is given).
+    Run(RunArgs),
+    /// Run the standard throughput benchmark.
+    Bench(bench::BenchArgs),
+}
+
+#[derive(clap::Args, Default)]
+struct RunArgs {
+    /// Case file (TOML).
+    case: Option<PathBuf>,
+    /// Output directory (default: out/<case name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Number of threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Exit codes: 0 success, 1 bad input or I/O error, 3 the simulation stopped early.
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => run(RunArgs::default()),
+        Some(Command::Run(args)) => run(args),
+        Some(Command::Bench(args)) => bench::bench(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err((code, message)) => {
+            eprintln!("error: {message}");
+            ExitCode::from(code)
+        }
+    }
+}
+
+/// Sets the size of rayon's global pool.
+pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err((1, "--threads: expected a positive number".into()));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| (1, format!("--threads: {e}")))?;
+    }
+    Ok(())
+}
+
+fn run(args: RunArgs) -> Result<(), (u8, String)> {
+    set_threads(args.threads)?;
+    let loaded = load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
+    let out = args.out.unwrap_or_else(|| bisph_io::case::default_out_dir(&loaded.case));
+    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} t = {msg} [{elapsed_precise} < {eta_precise}]")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let started = std::time::Instant::now();
+    let mut report = |p: Progress| {
+        if p.step % 20 == 0 || p.time >= p.end {
+            bar.set_position((1000.0 * p.time / p.end) as u64);
+            let rate = p.step as f64 / started.elapsed().as_secs_f64().max(1e-9);
+            bar.set_message(format!("{:.4} s, step {}, {:.0} steps/s", p.time, p.step, rate));
+        }
+    };
+    let result = run_case(&loaded, &out, &mut report);
+    bar.finish_and_clear();
+    match result {
+        Ok(s) => {
+            println!(
+                "{}: {} fluid particles, {} boundary elements, {} steps in {:.1} s ({:.3e} particle-steps/s), energy drift {:.3e}; outputs in {}",
+                s.case,
+                s.fluid_particles,
+                s.boundary_elements,
+                s.steps,
+                s.wall_seconds,
+                s.particle_steps_per_second,
+                s.energy_drift_relative,
+                out.display()
+            );
+            Ok(())
+        }
+        Err(RunError::Stopped(e)) => Err((3, format!("{e}; outputs so far kept in {}", out.display()))),
+        Err(e) => Err((1, e.to_string())),
+    }
+}

@@ -65,6 +65,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let mut grad_p = V::ZERO;
     let mut div_u = 0.0;
     let mut diffusion = 0.0;
+    let mut shepard = 0.0;
     let diffuse = model.diffusion.scale != 0.0;
     fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
         let f = kernel.gradient_factor(r);
@@ -77,8 +78,24 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
                 .diffusion
                 .pair(rho_i, fluid.density[j], r_ij, f, volume_j);
         }
+        if W::RENORMALISE {
+            shepard += kernel.value(r) * volume_j;
+        }
     });
     let wall = wall_model.particle_terms(kernel, x_i, u_i, p_i, elements, wall_grid);
+    if W::RENORMALISE && shepard > 0.0 {
+        // Paper 1 eqs 33-34: the wall part is the renormalised total minus the fluid part.
+        let scale = 1.0 / shepard;
+        let total_grad = (grad_p + wall.pressure_gradient) * scale;
+        let total_div = (div_u + wall.velocity_divergence) * scale;
+        return Operators {
+            pressure_gradient: grad_p,
+            velocity_divergence: div_u,
+            wall_pressure_gradient: total_grad - grad_p,
+            wall_velocity_divergence: total_div - div_u,
+            density_diffusion: diffusion,
+        };
+    }
     Operators {
         pressure_gradient: grad_p,
         velocity_divergence: div_u,

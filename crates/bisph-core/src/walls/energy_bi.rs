@@ -20,6 +20,18 @@ use rayon::prelude::*;
 pub struct EnergyConservingWalls;
 
 impl<V: Vector> WallModel<V> for EnergyConservingWalls {
+    const RENORMALISE: bool = false;
+
+    fn update_wall_pressure(
+        &self,
+        kernel: &Wendland,
+        elements: &mut BoundaryElements<V>,
+        fluid: &FluidState<V>,
+        fluid_grid: &CellGrid<V>,
+    ) {
+        wall_pressure(kernel, elements, fluid, fluid_grid);
+    }
+
     #[inline(always)]
     fn particle_terms(
         &self,

@@ -4,11 +4,14 @@
 //! wall, as in paper 1. Paper 3 uses the opposite sign; convert at its edges.
 
 pub mod bodies;
+pub mod bounce;
 pub mod energy_bi;
+pub mod shepard_bi;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
+use crate::particles::FluidState;
 pub use bodies::{Body, Kinematics, Motion, PrescribedMotion};
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
@@ -25,7 +28,10 @@ pub struct BoundaryElements<V: Vector> {
     pub velocity: Vec<V>,
     /// Index of the owning body in [`Walls::bodies`].
     pub body: Vec<u32>,
-    /// Wall pressure `P_j` (paper 1, eq 71), refreshed by [`energy_bi::wall_pressure`].
+    /// Largest distance from the centre to a corner (the element's reach in its plane).
+    pub reach: Vec<f64>,
+    /// Wall pressure on each element, refreshed by the wall model before each rate sweep
+    /// (paper 1 eq 71 for the energy-conserving walls; extrapolated from the fluid for `bi`).
     pub pressure: Vec<f64>,
     /// Centres in the body's reference configuration (time zero).
     pub reference_centre: Vec<V>,
@@ -60,6 +66,7 @@ impl<V: Vector> BoundaryElements<V> {
         self.velocity.push(V::ZERO);
         self.body.push(body);
         self.pressure.push(0.0);
+        self.reach.push(corners.iter().map(|&c| (c - centre).length()).fold(0.0, f64::max));
         self.reference_centre.push(centre);
         self.reference_normal.push(normal);
         self.reference_corners.extend_from_slice(corners);
@@ -176,7 +183,21 @@ pub struct WallTerms<V> {
 /// A wall model: supplies the wall part of the operators for a fluid particle and the wall
 /// pressure on each element. Physical terms ask it; they never test which model is active.
 pub trait WallModel<V: Vector>: Sync {
-    /// Wall terms for a fluid particle at `x` with velocity `u` and pressure `p`.
+    /// `true` when the whole operator (fluid and wall sums) is divided by the particle's
+    /// discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 1, eqs 24-25).
+    const RENORMALISE: bool;
+
+    /// Refreshes `elements.pressure`, the wall pressure used for forces and, where the model
+    /// needs it, in the wall terms. Called before every rate sweep.
+    fn update_wall_pressure(
+        &self,
+        kernel: &Wendland,
+        elements: &mut BoundaryElements<V>,
+        fluid: &FluidState<V>,
+        fluid_grid: &CellGrid<V>,
+    );
+
+    /// Wall sums for a fluid particle at `x` with velocity `u` and pressure `p`.
     fn particle_terms(
         &self,
         kernel: &Wendland,

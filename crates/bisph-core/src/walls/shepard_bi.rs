@@ -1,0 +1,69 @@
+//! Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25), kept for
+//! comparison with the energy-conserving walls:
+//! - `<grad p>_i = (1/gamma_i) [ -sum_j (p_j + p_i) grad W_ij V_j + sum_k (p_k + p_i) n_k W_ik s_k ]`;
+//! - `<div u>_i = (1/gamma_i) [ -sum_j (u_j - u_i) . grad W_ij V_j + sum_k (U_k - u_i) . n_k W_ik s_k ]`;
+//!
+//! with the discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 2, eq 4) and the wall
+//! pressure `p_k` extrapolated from the fluid with the hydrostatic correction,
+//! `p_k = sum_j (p_j + rho_j g . (r_k - r_j)) W_kj V_j / sum_j W_kj V_j`.
+//! These operators are not skew-adjoint: energy is not conserved (paper 1, section 4).
+
+use super::{BoundaryElements, WallModel, WallTerms};
+use crate::dim::Vector;
+use crate::kernel::Wendland;
+use crate::neighbours::CellGrid;
+use crate::particles::FluidState;
+use rayon::prelude::*;
+
+/// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ShepardWalls<V> {
+    /// Gravity, for the hydrostatic correction of the extrapolated wall pressure.
+    pub gravity: V,
+}
+
+impl<V: Vector> WallModel<V> for ShepardWalls<V> {
+    const RENORMALISE: bool = true;
+
+    fn update_wall_pressure(
+        &self,
+        kernel: &Wendland,
+        elements: &mut BoundaryElements<V>,
+        fluid: &FluidState<V>,
+        fluid_grid: &CellGrid<V>,
+    ) {
+        let centres = &elements.centre;
+        let g = self.gravity;
+        elements.pressure.par_iter_mut().enumerate().for_each(|(k, pk)| {
+            let (mut weighted, mut shepard) = (0.0, 0.0);
+            fluid_grid.for_each_neighbour(centres[k], fluid.position, kernel.support, |j, r_kj, r| {
+                let wv = kernel.value(r) * fluid.mass[j] / fluid.density[j];
+                // r_kj = r_j - r_k, so g . (r_k - r_j) = -g . r_kj.
+                weighted += (fluid.pressure[j] - fluid.density[j] * g.dot(r_kj)) * wv;
+                shepard += wv;
+            });
+            *pk = if shepard > 0.0 { weighted / shepard } else { 0.0 };
+        });
+    }
+
+    #[inline(always)]
+    fn particle_terms(
+        &self,
+        kernel: &Wendland,
+        x: V,
+        u: V,
+        p: f64,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> WallTerms<V> {
+        let mut pressure_gradient = V::ZERO;
+        let mut velocity_divergence = 0.0;
+        grid.for_each_neighbour(x, &elements.centre, kernel.support, |k, _, r| {
+            let ws = kernel.value(r) * elements.area[k];
+            let n = elements.normal[k];
+            pressure_gradient += n * ((elements.pressure[k] + p) * ws);
+            velocity_divergence += (elements.velocity[k] - u).dot(n) * ws;
+        });
+        WallTerms { pressure_gradient, velocity_divergence }
+    }
+}

@@ -1,0 +1,233 @@
+//! From a checked case to a ready [`Simulation`].
+
+use crate::case::{Case, FluidBlock, InitialPressure, LoadedCase, WallSpec};
+use bisph_core::geometry::{self, ElementShape};
+use bisph_core::probes::{Probe, ProbeKind};
+use bisph_core::walls::{Body, BoundaryElements, Motion, PrescribedMotion, Walls};
+use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
+use glam::{DVec2, DVec3};
+
+/// What differs between 2-D and 3-D when building a case.
+pub trait CaseDim: Vector {
+    /// Boundary elements of one `[[wall]]` of about `size`.
+    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>>;
+    /// Lattice points of one `[[fluid_block]]`.
+    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self>;
+}
+
+fn points2(points: &Option<Vec<Vec<f64>>>) -> Vec<DVec2> {
+    points.iter().flatten().map(|p| DVec2::from_slice(p)).collect()
+}
+
+impl CaseDim for DVec2 {
+    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
+        match wall.shape.as_str() {
+            "box" => geometry::box_elements_2d(
+                vec2(&wall.min),
+                vec2(&wall.max),
+                &wall.open,
+                size,
+            ),
+            "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
+            _ => geometry::polyline_elements(&points2(&wall.points), false, size),
+        }
+    }
+    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
+        match block.shape.as_str() {
+            "box" => geometry::lattice_box(vec2(&block.min), vec2(&block.max), dx),
+            _ => geometry::lattice_polygon(&points2(&block.points), dx),
+        }
+    }
+}
+
+impl CaseDim for DVec3 {
+    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
+        geometry::box_elements_3d(vec3(&wall.min), vec3(&wall.max), &wall.open, size)
+    }
+    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
+        geometry::lattice_box(vec3(&block.min), vec3(&block.max), dx)
+    }
+}
+
+fn vec2(v: &Option<Vec<f64>>) -> DVec2 {
+    DVec2::from_slice(v.as_deref().unwrap_or(&[0.0, 0.0]))
+}
+fn vec3(v: &Option<Vec<f64>>) -> DVec3 {
+    DVec3::from_slice(v.as_deref().unwrap_or(&[0.0, 0.0, 0.0]))
+}
+
+/// The equation of state of a case.
+pub fn eos_of(case: &Case) -> Eos {
+    let f = &case.fluid;
+    match f.eos {
+        crate::case::EosName::Linear => Eos::Linear { rho0: f.density, c0: f.sound_speed, p0: f.background_pressure },
+        crate::case::EosName::Tait => Eos::Tait {
+            rho0: f.density,
+            c0: f.sound_speed,
+            p0: f.background_pressure,
+            xi: f.tait_exponent,
+        },
+    }
+}
+
+/// Builds the simulation of a checked case.
+pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, crate::case::CaseError> {
+    let case = &loaded.case;
+    let dx = case.resolution.dx;
+    let h = case.resolution.h_over_dx * dx;
+    let kernel = Wendland::for_dim::<V>(h);
+    let eos = eos_of(case);
+    let gravity = V::from_slice(&case.fluid.gravity);
+
+    // Bodies: 0 = fixed walls, then the case's bodies in order.
+    let mut bodies = vec![Body::fixed("walls")];
+    for b in &case.body {
+        let motion = match &b.motion {
+            None => Motion::Fixed,
+            Some(m) => {
+                let get = |v: &Option<Vec<f64>>| V::from_slice(v.as_deref().unwrap_or(&[]));
+                let mut axis = get(&m.axis);
+                if V::DIM == 3 {
+                    let l = axis.length();
+                    axis = if l > 0.0 { axis / l } else { V::from_slice(&[0.0, 0.0, 1.0]) };
+                }
+                Motion::Prescribed(PrescribedMotion {
+                    velocity: get(&m.velocity),
+                    amplitude: get(&m.amplitude),
+                    frequency: m.frequency,
+                    phase: m.phase,
+                    axis,
+                    angular_velocity: m.angular_velocity,
+                    angular_amplitude: m.angular_amplitude,
+                    angular_frequency: m.angular_frequency,
+                })
+            }
+        };
+        let centre = V::from_slice(b.centre.as_deref().unwrap_or(&[]));
+        bodies.push(Body { name: b.name.clone(), centre, motion });
+    }
+
+    let mut elements = BoundaryElements::default();
+    let element_size = dx * case.resolution.element_over_dx;
+    for (k, w) in case.wall.iter().enumerate() {
+        let body = match &w.body {
+            None => 0,
+            Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
+        };
+        let shapes = V::wall_shapes(w, element_size);
+        if shapes.is_empty() {
+            return Err(loaded.error(&format!("wall[{k}]"), "this wall has no element (zero length or every side open)"));
+        }
+        for s in shapes {
+            elements.push(s.centre, s.normal, s.area, body, &s.corners);
+        }
+    }
+
+    let mut fluid = Fluid::default();
+    let mass = eos.rho0() * dx.powi(V::DIM as i32);
+    let g = gravity.length();
+    for (k, block) in case.fluid_block.iter().enumerate() {
+        let key = format!("fluid_block[{k}]");
+        if block.shape == "polyline" {
+            return Err(loaded.error(&format!("{key}.shape"), "a fluid block must be a closed \"box\" or \"polygon\""));
+        }
+        let points = V::fill(block, dx);
+        if points.is_empty() {
+            return Err(loaded.error(&key, format!("no lattice point of spacing dx = {dx} fits in this block")));
+        }
+        let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
+        let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
+        let surface = block.surface.unwrap_or_else(|| block_top(block, gravity, g));
+        let hydrostatic = match &block.pressure {
+            None => g > 0.0,
+            Some(InitialPressure::Named(_)) => true,
+            Some(InitialPressure::Value(_)) => false,
+        };
+        for r in points {
+            let p = match &block.pressure {
+                Some(InitialPressure::Value(p)) => *p,
+                _ if hydrostatic => eos_background(&eos) + eos.rho0() * g * (surface - height(r)).max(0.0),
+                _ => eos_background(&eos),
+            };
+            let Some(rho) = eos.density(p) else {
+                return Err(loaded.error(&format!("{key}.pressure"), format!("no density gives the pressure {p} Pa with this equation of state")));
+            };
+            fluid.push(r, velocity, rho, mass, p);
+        }
+    }
+
+    let (domain_min, domain_max) = match &case.domain {
+        Some(d) => (V::from_slice(&d.min), V::from_slice(&d.max)),
+        None => {
+            let mut lo = fluid.position[0];
+            let mut hi = lo;
+            for &r in fluid.position.iter().chain(elements.reference_corners.iter()) {
+                lo = lo.min_by_component(r);
+                hi = hi.max_by_component(r);
+            }
+            let mut margin = V::ZERO;
+            for k in 0..V::DIM {
+                margin.set(k, 0.1 * (hi.get(k) - lo.get(k)) + 2.0 * h);
+            }
+            (lo - margin, hi + margin)
+        }
+    };
+
+    let probes = case
+        .probe
+        .iter()
+        .map(|p| Probe {
+            name: p.name.clone(),
+            kind: if p.kind == "wall_pressure" { ProbeKind::WallPressure } else { ProbeKind::Pressure },
+            position: V::from_slice(&p.position),
+        })
+        .collect();
+
+    let config = SimConfig {
+        kernel,
+        eos,
+        gravity,
+        delta: case.fluid.delta,
+        delta_hydrostatic: case.fluid.delta_hydrostatic,
+        courant: case.time.courant,
+        fixed_dt: case.time.dt,
+        min_dt: case.time.min_dt.unwrap_or(1e-6 * h / eos.c0()),
+        domain_min,
+        domain_max,
+        wall_model: match case.boundary {
+            crate::case::BoundaryName::Energy => WallModelChoice::Energy,
+            crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi,
+        },
+        reorder_interval: 1,
+        elastic_bounce: case.elastic_bounce,
+    };
+    let walls = Walls::new(elements, bodies, kernel.support);
+    Ok(Simulation::new(config, fluid, walls, probes))
+}
+
+fn eos_background(eos: &Eos) -> f64 {
+    match *eos {
+        Eos::Linear { p0, .. } | Eos::Tait { p0, .. } => p0,
+    }
+}
+
+/// Highest point of a block along `-g`.
+fn block_top<V: Vector>(block: &FluidBlock, gravity: V, g: f64) -> f64 {
+    if g == 0.0 {
+        return 0.0;
+    }
+    let corners: Vec<Vec<f64>> = match (&block.min, &block.max, &block.points) {
+        (Some(lo), Some(hi), _) => {
+            let d = lo.len();
+            (0..1usize << d)
+                .map(|mask| (0..d).map(|k| if mask >> k & 1 == 1 { hi[k] } else { lo[k] }).collect())
+                .collect()
+        }
+        (_, _, Some(points)) => points.clone(),
+        _ => Vec::new(),
+    };
+    corners
+        .iter()
+        .map(|c| -gravity.dot(V::from_slice(c)) / g)
+        .fold(f64::NEG_INFINITY, f64::max)
+}

@@ -1,0 +1,603 @@
+//! The case file: a TOML document describing one simulation.
+//!
+//! Parsing is strict: unknown keys, wrong types and missing values are errors that name the
+//! file, the key and what was expected. `--set a.b=value` overrides any key before checking.
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// An error in a case file: which file, which key, what was expected.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseError {
+    /// The case file (or `<built-in>`).
+    pub file: String,
+    /// Dotted key path (empty when the whole file is at fault).
+    pub key: String,
+    /// What was wrong and what was expected.
+    pub message: String,
+}
+
+impl fmt::Display for CaseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.message)
+        } else {
+            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for CaseError {}
+
+/// Equation of state name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum EosName {
+    /// `p = p0 + c0^2 (rho - rho0)` (paper 1, eq 3).
+    #[default]
+    Linear,
+    /// Tait (paper 3, eq 15).
+    Tait,
+}
+
+/// Wall model name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryName {
+    /// Energy-conserving boundary integrals (paper 1).
+    #[default]
+    Energy,
+    /// Classic boundary integrals with discrete Shepard renormalisation (paper 1, eqs 24-25).
+    Bi,
+}
+
+/// `[fluid]`: material and physics.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSection {
+    /// Reference density `rho0` [kg/m^d].
+    pub density: f64,
+    /// Speed of sound `c0` [m/s].
+    pub sound_speed: f64,
+    /// Equation of state.
+    #[serde(default)]
+    pub eos: EosName,
+    /// Background pressure `p0` [Pa].
+    #[serde(default)]
+    pub background_pressure: f64,
+    /// Tait exponent.
+    #[serde(default = "default_tait_exponent")]
+    pub tait_exponent: f64,
+    /// Gravity vector [m/s^2] (`dim` components).
+    #[serde(default)]
+    pub gravity: Vec<f64>,
+    /// delta-SPH coefficient (0 = off).
+    #[serde(default)]
+    pub delta: f64,
+    /// Hydrostatic correction of the delta-SPH term.
+    #[serde(default = "yes")]
+    pub delta_hydrostatic: bool,
+}
+
+fn default_tait_exponent() -> f64 {
+    7.0
+}
+fn yes() -> bool {
+    true
+}
+
+/// `[resolution]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Resolution {
+    /// Particle spacing `dx` [m].
+    pub dx: f64,
+    /// Smoothing length over spacing, `h / dx` (support `2h`).
+    #[serde(default = "default_h_over_dx")]
+    pub h_over_dx: f64,
+    /// Boundary element size over `dx`.
+    #[serde(default = "one")]
+    pub element_over_dx: f64,
+}
+
+fn default_h_over_dx() -> f64 {
+    2.0
+}
+fn one() -> f64 {
+    1.0
+}
+
+/// `[time]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSection {
+    /// End time [s].
+    pub end: f64,
+    /// Courant number.
+    #[serde(default = "default_courant")]
+    pub courant: f64,
+    /// Fixed time step [s] (overrides the Courant rule).
+    pub dt: Option<f64>,
+    /// Smallest allowed time step [s]; the run stops below it (default 1e-6 of `h / c0`).
+    pub min_dt: Option<f64>,
+}
+
+fn default_courant() -> f64 {
+    0.2
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    /// Interval between VTK frames [s] (0 = none).
+    #[serde(default)]
+    pub vtk_interval: f64,
+    /// Interval between rows of `energy.csv`, `forces.csv`, `probes.csv` [s] (0 = every step).
+    #[serde(default)]
+    pub series_interval: f64,
+    /// Write PNG plots at the end.
+    #[serde(default = "yes")]
+    pub plots: bool,
+}
+
+impl Default for OutputSection {
+    fn default() -> Self {
+        OutputSection { vtk_interval: 0.0, series_interval: 0.0, plots: true }
+    }
+}
+
+/// `[domain]`: particles outside stop the run.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSection {
+    /// Lower corner.
+    pub min: Vec<f64>,
+    /// Upper corner.
+    pub max: Vec<f64>,
+}
+
+/// Initial pressure of a fluid block: `"hydrostatic"` or a number [Pa].
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum InitialPressure {
+    /// A uniform value.
+    Value(f64),
+    /// `"hydrostatic"`.
+    Named(String),
+}
+
+/// `[[fluid_block]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluidBlock {
+    /// `"box"` or `"polygon"` (2-D).
+    pub shape: String,
+    /// Box lower corner.
+    pub min: Option<Vec<f64>>,
+    /// Box upper corner.
+    pub max: Option<Vec<f64>>,
+    /// Polygon vertices.
+    pub points: Option<Vec<Vec<f64>>>,
+    /// Initial velocity.
+    pub velocity: Option<Vec<f64>>,
+    /// Initial pressure (default: hydrostatic under gravity, else zero).
+    pub pressure: Option<InitialPressure>,
+    /// Free-surface level along `-g` for the hydrostatic pressure (default: top of the block).
+    pub surface: Option<f64>,
+}
+
+/// `[[wall]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// `"box"`, `"polyline"` or `"polygon"` (2-D).
+    pub shape: String,
+    /// Box lower corner.
+    pub min: Option<Vec<f64>>,
+    /// Box upper corner.
+    pub max: Option<Vec<f64>>,
+    /// Box sides left open (`"-x"`, `"+x"`, `"-y"`, `"+y"`, `"-z"`, `"+z"`).
+    #[serde(default)]
+    pub open: Vec<String>,
+    /// Polyline / polygon vertices; the fluid lies on their left.
+    pub points: Option<Vec<Vec<f64>>>,
+    /// Owning body (default: the fixed walls).
+    pub body: Option<String>,
+}
+
+/// `[body.motion]`: prescribed motion (see `PrescribedMotion`).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MotionSpec {
+    /// Constant velocity.
+    pub velocity: Option<Vec<f64>>,
+    /// Oscillation amplitude.
+    pub amplitude: Option<Vec<f64>>,
+    /// Oscillation frequency [Hz].
+    #[serde(default)]
+    pub frequency: f64,
+    /// Oscillation phase [rad].
+    #[serde(default)]
+    pub phase: f64,
+    /// Rotation axis (3-D).
+    pub axis: Option<Vec<f64>>,
+    /// Constant angular velocity [rad/s].
+    #[serde(default)]
+    pub angular_velocity: f64,
+    /// Angular oscillation amplitude [rad].
+    #[serde(default)]
+    pub angular_amplitude: f64,
+    /// Angular oscillation frequency [Hz].
+    #[serde(default)]
+    pub angular_frequency: f64,
+}
+
+/// `[[body]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name (referred to by walls, used in `forces.csv`).
+    pub name: String,
+    /// Reference point (centre of rotation and moments).
+    pub centre: Option<Vec<f64>>,
+    /// Prescribed motion (none: fixed).
+    pub motion: Option<MotionSpec>,
+}
+
+/// `[[probe]]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeSpec {
+    /// Column name.
+    pub name: String,
+    /// `"pressure"` (fluid, Shepard-normalised) or `"wall_pressure"` (`2 sum p W V`).
+    pub kind: String,
+    /// Position.
+    pub position: Vec<f64>,
+}
+
+/// A whole case file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Case name.
+    pub name: String,
+    /// Dimension, 2 or 3.
+    pub dim: u32,
+    /// Wall model.
+    #[serde(default)]
+    pub boundary: BoundaryName,
+    /// Reflect particles about to cross a wall (energy-neutral on fixed walls).
+    #[serde(default = "yes")]
+    pub elastic_bounce: bool,
+    /// Material and physics.
+    pub fluid: FluidSection,
+    /// Resolution.
+    pub resolution: Resolution,
+    /// Time stepping.
+    pub time: TimeSection,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputSection,
+    /// Domain.
+    pub domain: Option<DomainSection>,
+    /// Fluid blocks.
+    #[serde(default)]
+    pub fluid_block: Vec<FluidBlock>,
+    /// Walls.
+    #[serde(default)]
+    pub wall: Vec<WallSpec>,
+    /// Moving bodies.
+    #[serde(default)]
+    pub body: Vec<BodySpec>,
+    /// Probes.
+    #[serde(default)]
+    pub probe: Vec<ProbeSpec>,
+}
+
+/// The built-in default case: the 2-D dam break (`cases/dam-break-2d.toml`).
+pub const DEFAULT_CASE: &str = include_str!("../../../cases/dam-break-2d.toml");
+
+/// A parsed case and where it came from.
+#[derive(Debug, Clone)]
+pub struct LoadedCase {
+    /// The case.
+    pub case: Case,
+    /// Its file (or `<built-in>`).
+    pub source: String,
+    /// The TOML text after overrides (copied to the output directory).
+    pub text: String,
+}
+
+impl LoadedCase {
+    /// A key error for this case.
+    pub fn error(&self, key: &str, message: impl Into<String>) -> CaseError {
+        CaseError { file: self.source.clone(), key: key.to_string(), message: message.into() }
+    }
+}
+
+/// Reads a case file (or the built-in default with `None`) and applies `key=value` overrides.
+pub fn load_case(path: Option<&Path>, overrides: &[String]) -> Result<LoadedCase, CaseError> {
+    let (source, text) = match path {
+        Some(p) => {
+            let source = p.display().to_string();
+            let text = std::fs::read_to_string(p).map_err(|e| CaseError {
+                file: source.clone(),
+                key: String::new(),
+                message: format!("cannot read the case file: {e}"),
+            })?;
+            (source, text)
+        }
+        None => ("<built-in dam-break-2d>".to_string(), DEFAULT_CASE.to_string()),
+    };
+    parse_case(&source, &text, overrides)
+}
+
+/// Parses case text, applies overrides, checks it.
+pub fn parse_case(source: &str, text: &str, overrides: &[String]) -> Result<LoadedCase, CaseError> {
+    let err = |key: &str, message: String| CaseError { file: source.to_string(), key: key.to_string(), message };
+    let mut doc: toml::Table = text.parse().map_err(|e: toml::de::Error| err("", format!("not valid TOML: {}", e.message())))?;
+    for item in overrides {
+        let Some((key, value)) = item.split_once('=') else {
+            return Err(err(item, "an override must read key=value (e.g. resolution.dx=0.01)".into()));
+        };
+        let value = parse_override_value(value.trim());
+        set_dotted(&mut doc, key.trim(), value).map_err(|m| err(key.trim(), m))?;
+    }
+    let text = toml::to_string(&doc).map_err(|e| err("", format!("cannot re-serialise the case: {e}")))?;
+    let case: Case = toml::from_str(&text).map_err(|e| {
+        let span_key = key_of_error(&text, &e);
+        err(&span_key, e.message().to_string())
+    })?;
+    let loaded = LoadedCase { case, source: source.to_string(), text };
+    check_case(&loaded)?;
+    Ok(loaded)
+}
+
+/// An override value: TOML if it parses as one (number, bool, array), else a string.
+fn parse_override_value(raw: &str) -> toml::Value {
+    let wrapped = format!("v = {raw}");
+    match wrapped.parse::<toml::Table>() {
+        Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(raw.to_string())),
+        Err(_) => toml::Value::String(raw.to_string()),
+    }
+}
+
+/// Sets `a.b.c` (array entries by index, `fluid_block.0.min`) in a TOML table.
+fn set_dotted(doc: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err("an empty segment in the dotted key".into());
+    }
+    let mut node = doc
+        .entry(parts[0].to_string())
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    if parts.len() == 1 {
+        *node = value;
+        return Ok(());
+    }
+    for (depth, part) in parts.iter().enumerate().skip(1) {
+        let last = depth == parts.len() - 1;
+        node = match node {
+            toml::Value::Table(t) => {
+                if last {
+                    t.insert(part.to_string(), value);
+                    return Ok(());
+                }
+                t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            toml::Value::Array(a) => {
+                let index: usize = part.parse().map_err(|_| format!("`{part}` should be an index into a list"))?;
+                let len = a.len();
+                let slot = a.get_mut(index).ok_or_else(|| format!("index {index} is past the list's {len} entries"))?;
+                if last {
+                    *slot = value;
+                    return Ok(());
+                }
+                slot
+            }
+            _ => return Err(format!("`{}` is not a table", parts[..depth].join("."))),
+        };
+    }
+    Ok(())
+}
+
+/// The dotted key at the error's span, found from the TOML text (best effort).
+fn key_of_error(text: &str, e: &toml::de::Error) -> String {
+    let Some(span) = e.span() else { return String::new() };
+    let before = &text[..span.start.min(text.len())];
+    let mut table = String::new();
+    let mut index: std::collections::HashMap<String, usize> = Default::default();
+    for line in before.lines() {
+        let l = line.trim();
+        if let Some(name) = l.strip_prefix("[[").and_then(|s| s.strip_suffix("]]")) {
+            let n = index.entry(name.to_string()).and_modify(|n| *n += 1).or_insert(0);
+            table = format!("{name}[{n}]");
+        } else if let Some(name) = l.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
+            table = name.to_string();
+        }
+    }
+    let line_start = before.rfind('\n').map_or(0, |k| k + 1);
+    let line = text[line_start..].lines().next().unwrap_or("");
+    let key = line.split('=').next().unwrap_or("").trim().trim_matches('"');
+    let key = if key.starts_with('[') { "" } else { key };
+    match (table.is_empty(), key.is_empty()) {
+        (true, _) => key.to_string(),
+        (false, true) => table,
+        (false, false) => format!("{table}.{key}"),
+    }
+}
+
+/// Checks values for physical sense and consistency; errors name the key and the allowed range.
+pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let e = |key: &str, msg: String| Err(loaded.error(key, msg));
+    if c.dim != 2 && c.dim != 3 {
+        return e("dim", format!("expected 2 or 3, found {}", c.dim));
+    }
+    let d = c.dim as usize;
+    let positive = |key: &str, v: f64| -> Result<(), CaseError> {
+        if v > 0.0 && v.is_finite() {
+            Ok(())
+        } else {
+            Err(loaded.error(key, format!("expected a positive number, found {v}")))
+        }
+    };
+    positive("fluid.density", c.fluid.density)?;
+    positive("fluid.sound_speed", c.fluid.sound_speed)?;
+    positive("resolution.dx", c.resolution.dx)?;
+    positive("time.end", c.time.end)?;
+    positive("resolution.element_over_dx", c.resolution.element_over_dx)?;
+    if !(c.fluid.tait_exponent > 1.0) {
+        return e("fluid.tait_exponent", format!("expected a number above 1, found {}", c.fluid.tait_exponent));
+    }
+    if !(1.0..=4.0).contains(&c.resolution.h_over_dx) {
+        return e("resolution.h_over_dx", format!("expected a value in [1, 4], found {}", c.resolution.h_over_dx));
+    }
+    if !(c.time.courant > 0.0 && c.time.courant <= 1.0) {
+        return e("time.courant", format!("expected a value in (0, 1], found {}", c.time.courant));
+    }
+    if let Some(dt) = c.time.dt {
+        positive("time.dt", dt)?;
+    }
+    if let Some(dt) = c.time.min_dt {
+        positive("time.min_dt", dt)?;
+    }
+    if !(c.fluid.delta >= 0.0 && c.fluid.delta <= 1.0) {
+        return e("fluid.delta", format!("expected a value in [0, 1], found {}", c.fluid.delta));
+    }
+    if !c.fluid.background_pressure.is_finite() {
+        return e("fluid.background_pressure", "expected a finite number".into());
+    }
+    if !c.fluid.gravity.is_empty() {
+        vector(loaded, "fluid.gravity", &c.fluid.gravity, d)?;
+    }
+    if c.output.vtk_interval < 0.0 || c.output.series_interval < 0.0 {
+        return e("output", "intervals must be zero or positive".into());
+    }
+    if c.fluid_block.is_empty() {
+        return e("fluid_block", "expected at least one [[fluid_block]]: the case has no fluid".into());
+    }
+    for (k, b) in c.fluid_block.iter().enumerate() {
+        let key = format!("fluid_block[{k}]");
+        shape_points(loaded, &key, &b.shape, &b.min, &b.max, &b.points, d)?;
+        if let Some(v) = &b.velocity {
+            vector(loaded, &format!("{key}.velocity"), v, d)?;
+        }
+        if let Some(InitialPressure::Named(name)) = &b.pressure {
+            if name != "hydrostatic" {
+                return e(&format!("{key}.pressure"), format!("expected \"hydrostatic\" or a number, found \"{name}\""));
+            }
+        }
+    }
+    if c.wall.is_empty() && c.domain.is_none() {
+        return e("wall", "expected at least one [[wall]], or a [domain] for a case without walls".into());
+    }
+    for (k, w) in c.wall.iter().enumerate() {
+        let key = format!("wall[{k}]");
+        shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+        let sides: &[&str] = if d == 2 { &bisph_core::geometry::BOX_SIDES_2D } else { &bisph_core::geometry::BOX_FACES_3D };
+        for o in &w.open {
+            if !sides.contains(&o.as_str()) {
+                return e(&format!("{key}.open"), format!("expected sides among {sides:?}, found \"{o}\""));
+            }
+        }
+        if let Some(body) = &w.body {
+            if !c.body.iter().any(|b| &b.name == body) {
+                return e(&format!("{key}.body"), format!("no [[body]] is named \"{body}\""));
+            }
+        }
+    }
+    for (k, b) in c.body.iter().enumerate() {
+        let key = format!("body[{k}]");
+        if b.name.is_empty() || c.body.iter().filter(|o| o.name == b.name).count() > 1 {
+            return e(&format!("{key}.name"), format!("expected a unique, non-empty name, found \"{}\"", b.name));
+        }
+        if let Some(centre) = &b.centre {
+            vector(loaded, &format!("{key}.centre"), centre, d)?;
+        }
+        if let Some(m) = &b.motion {
+            for (name, v) in [("velocity", &m.velocity), ("amplitude", &m.amplitude), ("axis", &m.axis)] {
+                if let Some(v) = v {
+                    vector(loaded, &format!("{key}.motion.{name}"), v, if name == "axis" { 3 } else { d })?;
+                }
+            }
+        }
+    }
+    if let Some(dom) = &c.domain {
+        vector(loaded, "domain.min", &dom.min, d)?;
+        vector(loaded, "domain.max", &dom.max, d)?;
+        if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
+            return e("domain", "expected min < max in every direction".into());
+        }
+        if dom.min.iter().zip(&dom.max).all(|(a, b)| b - a < c.resolution.dx) {
+            return e("resolution.dx", "dx is larger than the domain".into());
+        }
+    }
+    for (k, p) in c.probe.iter().enumerate() {
+        let key = format!("probe[{k}]");
+        vector(loaded, &format!("{key}.position"), &p.position, d)?;
+        if p.kind != "pressure" && p.kind != "wall_pressure" {
+            return e(&format!("{key}.kind"), format!("expected \"pressure\" or \"wall_pressure\", found \"{}\"", p.kind));
+        }
+    }
+    Ok(())
+}
+
+fn vector(loaded: &LoadedCase, key: &str, v: &[f64], d: usize) -> Result<(), CaseError> {
+    if v.len() != d {
+        return Err(loaded.error(key, format!("expected {d} numbers, found {}", v.len())));
+    }
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(loaded.error(key, "expected finite numbers".to_string()));
+    }
+    Ok(())
+}
+
+fn shape_points(
+    loaded: &LoadedCase,
+    key: &str,
+    shape: &str,
+    min: &Option<Vec<f64>>,
+    max: &Option<Vec<f64>>,
+    points: &Option<Vec<Vec<f64>>>,
+    d: usize,
+) -> Result<(), CaseError> {
+    match shape {
+        "box" => {
+            let (Some(lo), Some(hi)) = (min, max) else {
+                return Err(loaded.error(key, "a box needs `min` and `max`"));
+            };
+            vector(loaded, &format!("{key}.min"), lo, d)?;
+            vector(loaded, &format!("{key}.max"), hi, d)?;
+            if lo.iter().zip(hi).any(|(a, b)| a >= b) {
+                return Err(loaded.error(key, "expected min < max in every direction"));
+            }
+            Ok(())
+        }
+        "polygon" | "polyline" if d == 2 => {
+            let Some(pts) = points else {
+                return Err(loaded.error(&format!("{key}.points"), "missing: a list of [x, y] vertices"));
+            };
+            let needed = if shape == "polygon" { 3 } else { 2 };
+            if pts.len() < needed {
+                return Err(loaded.error(&format!("{key}.points"), format!("expected at least {needed} vertices, found {}", pts.len())));
+            }
+            for (k, p) in pts.iter().enumerate() {
+                vector(loaded, &format!("{key}.points[{k}]"), p, 2)?;
+            }
+            Ok(())
+        }
+        other => {
+            let allowed = if d == 2 { "\"box\", \"polygon\" or \"polyline\"" } else { "\"box\"" };
+            Err(loaded.error(&format!("{key}.shape"), format!("expected {allowed} in {d}-D, found \"{other}\"")))
+        }
+    }
+}
+
+/// Where a run writes by default: `out/<case name>`.
+pub fn default_out_dir(case: &Case) -> PathBuf {
+    PathBuf::from("out").join(&case.name)
+}
