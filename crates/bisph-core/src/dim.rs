@@ -4,6 +4,8 @@
 //! [`glam::DVec3`]. The command line picks the dimension once (`match case.dim`) and the
 //! whole solver is monomorphised for it; `V::DIM` branches are constant-folded.
 
+use crate::kernel::Wendland;
+use crate::walls::geometric_shepard;
 use glam::{DVec2, DVec3};
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
@@ -56,8 +58,8 @@ pub trait Vector:
     /// Builds a vector from the first `DIM` entries of a slice (missing entries are zero).
     fn from_slice(values: &[f64]) -> Self {
         let mut v = Self::ZERO;
-        for k in 0..Self::DIM.min(values.len()) {
-            v.set(k, values[k]);
+        for (k, &x) in values.iter().enumerate().take(Self::DIM) {
+            v.set(k, x);
         }
         v
     }
@@ -79,6 +81,15 @@ pub trait Vector:
     fn angular_from_slice(values: &[f64]) -> Self::Angular;
     /// Angular quantity as a list (for output): 1 entry in 2-D, 3 in 3-D.
     fn angular_to_vec(a: Self::Angular) -> Vec<f64>;
+    /// Contribution of one wall element (its corners, outward normal and area) to the
+    /// geometric Shepard factor at `x`, `gamma(x) - 1` (see [`crate::walls::geometric_shepard`]).
+    fn wall_gamma_contribution(
+        kernel: &Wendland,
+        x: Self,
+        corners: &[Self],
+        normal: Self,
+        area: f64,
+    ) -> f64;
 }
 
 impl Vector for DVec2 {
@@ -125,6 +136,15 @@ impl Vector for DVec2 {
     }
     fn angular_to_vec(a: f64) -> Vec<f64> {
         vec![a]
+    }
+    fn wall_gamma_contribution(
+        kernel: &Wendland,
+        x: Self,
+        corners: &[Self],
+        normal: Self,
+        _area: f64,
+    ) -> f64 {
+        geometric_shepard::segment_contribution(kernel, x, corners[0], corners[1], normal)
     }
 }
 
@@ -175,6 +195,15 @@ impl Vector for DVec3 {
     }
     fn angular_to_vec(a: DVec3) -> Vec<f64> {
         vec![a.x, a.y, a.z]
+    }
+    fn wall_gamma_contribution(
+        kernel: &Wendland,
+        x: Self,
+        corners: &[Self],
+        normal: Self,
+        area: f64,
+    ) -> f64 {
+        geometric_shepard::patch_contribution(kernel, x, corners, normal, area)
     }
 }
 

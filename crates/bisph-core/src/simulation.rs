@@ -20,7 +20,7 @@ use crate::probes::Probe;
 use crate::terms::{compute_rates, DensityDiffusion, RateModel};
 use crate::walls::bounce::elastic_bounce;
 use crate::walls::energy_bi::EnergyConservingWalls;
-use crate::walls::shepard_bi::ShepardWalls;
+use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
 use crate::walls::WallModel;
 use crate::walls::Walls;
 use rayon::prelude::*;
@@ -31,8 +31,8 @@ pub enum WallModelChoice {
     /// Energy-conserving boundary integrals (paper 1). The default.
     #[default]
     Energy,
-    /// Classic boundary integrals with discrete Shepard renormalisation (paper 1, eqs 24-25).
-    ShepardBi,
+    /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
+    ShepardBi(ShepardKind),
 }
 
 /// Parameters of a simulation.
@@ -198,11 +198,20 @@ impl<V: Vector> Simulation<V> {
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         match self.config.wall_model {
-            WallModelChoice::Energy => {
-                sweep(&model, &EnergyConservingWalls, &state, grid, walls, acceleration, density_rate)
-            }
-            WallModelChoice::ShepardBi => {
-                let bi = ShepardWalls { gravity: model.gravity };
+            WallModelChoice::Energy => sweep(
+                &model,
+                &EnergyConservingWalls,
+                &state,
+                grid,
+                walls,
+                acceleration,
+                density_rate,
+            ),
+            WallModelChoice::ShepardBi(shepard) => {
+                let bi = ShepardWalls {
+                    gravity: model.gravity,
+                    shepard,
+                };
                 sweep(&model, &bi, &state, grid, walls, acceleration, density_rate)
             }
         }
@@ -237,7 +246,7 @@ impl<V: Vector> Simulation<V> {
                 dt = end - self.time;
             }
         }
-        if !(dt >= self.config.min_dt) {
+        if dt.is_nan() || dt < self.config.min_dt {
             return Err(SimError::TimeStepCollapse {
                 dt,
                 step: self.step,
@@ -248,7 +257,10 @@ impl<V: Vector> Simulation<V> {
         // 1. kick, bounce off walls, drift.
         {
             let f = &mut self.fluid;
-            f.velocity.par_iter_mut().zip(f.acceleration.par_iter()).for_each(|(u, &a)| *u += a * half);
+            f.velocity
+                .par_iter_mut()
+                .zip(f.acceleration.par_iter())
+                .for_each(|(u, &a)| *u += a * half);
             if self.config.elastic_bounce {
                 self.wall_work += elastic_bounce(
                     &self.walls.elements,
@@ -260,7 +272,10 @@ impl<V: Vector> Simulation<V> {
                     &mut self.scratch.lost_energy,
                 );
             }
-            f.position.par_iter_mut().zip(f.velocity.par_iter()).for_each(|(r, &u)| *r += u * dt);
+            f.position
+                .par_iter_mut()
+                .zip(f.velocity.par_iter())
+                .for_each(|(r, &u)| *r += u * dt);
             f.density
                 .par_iter_mut()
                 .zip(f.density_rate.par_iter())
@@ -274,7 +289,7 @@ impl<V: Vector> Simulation<V> {
         // 2. walls, neighbours, rates at the predicted state.
         self.walls.move_to(self.time);
         let interval = self.config.reorder_interval;
-        self.rebuild_grid(interval > 0 && self.step % interval == 0);
+        self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
         {
             let f = &self.fluid;
             let s = &mut self.scratch;
@@ -322,7 +337,8 @@ impl<V: Vector> Simulation<V> {
             outside
                 || !f.velocity[i].is_finite()
                 || !f.density[i].is_finite()
-                || !(f.density[i] > 0.0)
+                || f.density[i].is_nan()
+                || f.density[i] <= 0.0
         });
         let Some(i) = bad else { return Ok(()) };
         let (particle, step, time) = (f.id[i], self.step, self.time);
@@ -342,7 +358,7 @@ impl<V: Vector> Simulation<V> {
                 time,
             });
         }
-        if !(f.density[i].is_finite() && f.density[i] > 0.0) {
+        if !f.density[i].is_finite() || f.density[i] <= 0.0 {
             return Err(SimError::NonFinite {
                 particle,
                 quantity: "density",
@@ -420,5 +436,14 @@ fn sweep<V: Vector, W: WallModel<V>>(
     density_rate: &mut [f64],
 ) {
     wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
-    compute_rates(model, wall_model, state, fluid_grid, &walls.elements, &walls.grid, acceleration, density_rate);
+    compute_rates(
+        model,
+        wall_model,
+        state,
+        fluid_grid,
+        &walls.elements,
+        &walls.grid,
+        acceleration,
+        density_rate,
+    );
 }

@@ -3,6 +3,7 @@
 use crate::case::{Case, FluidBlock, InitialPressure, LoadedCase, WallSpec};
 use bisph_core::geometry::{self, ElementShape};
 use bisph_core::probes::{Probe, ProbeKind};
+use bisph_core::walls::shepard_bi::ShepardKind;
 use bisph_core::walls::{Body, BoundaryElements, Motion, PrescribedMotion, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
 use glam::{DVec2, DVec3};
@@ -16,18 +17,17 @@ pub trait CaseDim: Vector {
 }
 
 fn points2(points: &Option<Vec<Vec<f64>>>) -> Vec<DVec2> {
-    points.iter().flatten().map(|p| DVec2::from_slice(p)).collect()
+    points
+        .iter()
+        .flatten()
+        .map(|p| DVec2::from_slice(p))
+        .collect()
 }
 
 impl CaseDim for DVec2 {
     fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
         match wall.shape.as_str() {
-            "box" => geometry::box_elements_2d(
-                vec2(&wall.min),
-                vec2(&wall.max),
-                &wall.open,
-                size,
-            ),
+            "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
             "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
             _ => geometry::polyline_elements(&points2(&wall.points), false, size),
         }
@@ -60,7 +60,11 @@ fn vec3(v: &Option<Vec<f64>>) -> DVec3 {
 pub fn eos_of(case: &Case) -> Eos {
     let f = &case.fluid;
     match f.eos {
-        crate::case::EosName::Linear => Eos::Linear { rho0: f.density, c0: f.sound_speed, p0: f.background_pressure },
+        crate::case::EosName::Linear => Eos::Linear {
+            rho0: f.density,
+            c0: f.sound_speed,
+            p0: f.background_pressure,
+        },
         crate::case::EosName::Tait => Eos::Tait {
             rho0: f.density,
             c0: f.sound_speed,
@@ -71,7 +75,9 @@ pub fn eos_of(case: &Case) -> Eos {
 }
 
 /// Builds the simulation of a checked case.
-pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, crate::case::CaseError> {
+pub fn build_simulation<V: CaseDim>(
+    loaded: &LoadedCase,
+) -> Result<Simulation<V>, crate::case::CaseError> {
     let case = &loaded.case;
     let dx = case.resolution.dx;
     let h = case.resolution.h_over_dx * dx;
@@ -89,7 +95,11 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                 let mut axis = get(&m.axis);
                 if V::DIM == 3 {
                     let l = axis.length();
-                    axis = if l > 0.0 { axis / l } else { V::from_slice(&[0.0, 0.0, 1.0]) };
+                    axis = if l > 0.0 {
+                        axis / l
+                    } else {
+                        V::from_slice(&[0.0, 0.0, 1.0])
+                    };
                 }
                 Motion::Prescribed(PrescribedMotion {
                     velocity: get(&m.velocity),
@@ -104,7 +114,11 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             }
         };
         let centre = V::from_slice(b.centre.as_deref().unwrap_or(&[]));
-        bodies.push(Body { name: b.name.clone(), centre, motion });
+        bodies.push(Body {
+            name: b.name.clone(),
+            centre,
+            motion,
+        });
     }
 
     let mut elements = BoundaryElements::default();
@@ -116,7 +130,10 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         };
         let shapes = V::wall_shapes(w, element_size);
         if shapes.is_empty() {
-            return Err(loaded.error(&format!("wall[{k}]"), "this wall has no element (zero length or every side open)"));
+            return Err(loaded.error(
+                &format!("wall[{k}]"),
+                "this wall has no element (zero length or every side open)",
+            ));
         }
         for s in shapes {
             elements.push(s.centre, s.normal, s.area, body, &s.corners);
@@ -129,15 +146,23 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     for (k, block) in case.fluid_block.iter().enumerate() {
         let key = format!("fluid_block[{k}]");
         if block.shape == "polyline" {
-            return Err(loaded.error(&format!("{key}.shape"), "a fluid block must be a closed \"box\" or \"polygon\""));
+            return Err(loaded.error(
+                &format!("{key}.shape"),
+                "a fluid block must be a closed \"box\" or \"polygon\"",
+            ));
         }
         let points = V::fill(block, dx);
         if points.is_empty() {
-            return Err(loaded.error(&key, format!("no lattice point of spacing dx = {dx} fits in this block")));
+            return Err(loaded.error(
+                &key,
+                format!("no lattice point of spacing dx = {dx} fits in this block"),
+            ));
         }
         let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
         let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
-        let surface = block.surface.unwrap_or_else(|| block_top(block, gravity, g));
+        let surface = block
+            .surface
+            .unwrap_or_else(|| block_top(block, gravity, g));
         let hydrostatic = match &block.pressure {
             None => g > 0.0,
             Some(InitialPressure::Named(_)) => true,
@@ -146,11 +171,16 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         for r in points {
             let p = match &block.pressure {
                 Some(InitialPressure::Value(p)) => *p,
-                _ if hydrostatic => eos_background(&eos) + eos.rho0() * g * (surface - height(r)).max(0.0),
+                _ if hydrostatic => {
+                    eos_background(&eos) + eos.rho0() * g * (surface - height(r)).max(0.0)
+                }
                 _ => eos_background(&eos),
             };
             let Some(rho) = eos.density(p) else {
-                return Err(loaded.error(&format!("{key}.pressure"), format!("no density gives the pressure {p} Pa with this equation of state")));
+                return Err(loaded.error(
+                    &format!("{key}.pressure"),
+                    format!("no density gives the pressure {p} Pa with this equation of state"),
+                ));
             };
             fluid.push(r, velocity, rho, mass, p);
         }
@@ -161,7 +191,11 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         None => {
             let mut lo = fluid.position[0];
             let mut hi = lo;
-            for &r in fluid.position.iter().chain(elements.reference_corners.iter()) {
+            for &r in fluid
+                .position
+                .iter()
+                .chain(elements.reference_corners.iter())
+            {
                 lo = lo.min_by_component(r);
                 hi = hi.max_by_component(r);
             }
@@ -178,7 +212,11 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         .iter()
         .map(|p| Probe {
             name: p.name.clone(),
-            kind: if p.kind == "wall_pressure" { ProbeKind::WallPressure } else { ProbeKind::Pressure },
+            kind: if p.kind == "wall_pressure" {
+                ProbeKind::WallPressure
+            } else {
+                ProbeKind::Pressure
+            },
             position: V::from_slice(&p.position),
         })
         .collect();
@@ -196,7 +234,10 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         domain_max,
         wall_model: match case.boundary {
             crate::case::BoundaryName::Energy => WallModelChoice::Energy,
-            crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi,
+            crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi(match case.shepard {
+                crate::case::ShepardName::Discrete => ShepardKind::Discrete,
+                crate::case::ShepardName::Geometric => ShepardKind::Geometric,
+            }),
         },
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
@@ -220,7 +261,11 @@ fn block_top<V: Vector>(block: &FluidBlock, gravity: V, g: f64) -> f64 {
         (Some(lo), Some(hi), _) => {
             let d = lo.len();
             (0..1usize << d)
-                .map(|mask| (0..d).map(|k| if mask >> k & 1 == 1 { hi[k] } else { lo[k] }).collect())
+                .map(|mask| {
+                    (0..d)
+                        .map(|k| if mask >> k & 1 == 1 { hi[k] } else { lo[k] })
+                        .collect()
+                })
                 .collect()
         }
         (_, _, Some(points)) => points.clone(),

@@ -52,6 +52,17 @@ pub enum BoundaryName {
     Bi,
 }
 
+/// Shepard factor name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ShepardName {
+    /// `sum_j W_ij V_j` over the fluid.
+    #[default]
+    Discrete,
+    /// From the wall elements alone (paper 2).
+    Geometric,
+}
+
 /// `[fluid]`: material and physics.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -144,7 +155,11 @@ pub struct OutputSection {
 
 impl Default for OutputSection {
     fn default() -> Self {
-        OutputSection { vtk_interval: 0.0, series_interval: 0.0, plots: true }
+        OutputSection {
+            vtk_interval: 0.0,
+            series_interval: 0.0,
+            plots: true,
+        }
     }
 }
 
@@ -269,6 +284,9 @@ pub struct Case {
     /// Wall model.
     #[serde(default)]
     pub boundary: BoundaryName,
+    /// Shepard factor of the `bi` walls: `"discrete"` or `"geometric"`.
+    #[serde(default)]
+    pub shepard: ShepardName,
     /// Reflect particles about to cross a wall (energy-neutral on fixed walls).
     #[serde(default = "yes")]
     pub elastic_bounce: bool,
@@ -314,7 +332,11 @@ pub struct LoadedCase {
 impl LoadedCase {
     /// A key error for this case.
     pub fn error(&self, key: &str, message: impl Into<String>) -> CaseError {
-        CaseError { file: self.source.clone(), key: key.to_string(), message: message.into() }
+        CaseError {
+            file: self.source.clone(),
+            key: key.to_string(),
+            message: message.into(),
+        }
     }
 }
 
@@ -330,28 +352,45 @@ pub fn load_case(path: Option<&Path>, overrides: &[String]) -> Result<LoadedCase
             })?;
             (source, text)
         }
-        None => ("<built-in dam-break-2d>".to_string(), DEFAULT_CASE.to_string()),
+        None => (
+            "<built-in dam-break-2d>".to_string(),
+            DEFAULT_CASE.to_string(),
+        ),
     };
     parse_case(&source, &text, overrides)
 }
 
 /// Parses case text, applies overrides, checks it.
 pub fn parse_case(source: &str, text: &str, overrides: &[String]) -> Result<LoadedCase, CaseError> {
-    let err = |key: &str, message: String| CaseError { file: source.to_string(), key: key.to_string(), message };
-    let mut doc: toml::Table = text.parse().map_err(|e: toml::de::Error| err("", format!("not valid TOML: {}", e.message())))?;
+    let err = |key: &str, message: String| CaseError {
+        file: source.to_string(),
+        key: key.to_string(),
+        message,
+    };
+    let mut doc: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| err("", format!("not valid TOML: {}", e.message())))?;
     for item in overrides {
         let Some((key, value)) = item.split_once('=') else {
-            return Err(err(item, "an override must read key=value (e.g. resolution.dx=0.01)".into()));
+            return Err(err(
+                item,
+                "an override must read key=value (e.g. resolution.dx=0.01)".into(),
+            ));
         };
         let value = parse_override_value(value.trim());
         set_dotted(&mut doc, key.trim(), value).map_err(|m| err(key.trim(), m))?;
     }
-    let text = toml::to_string(&doc).map_err(|e| err("", format!("cannot re-serialise the case: {e}")))?;
+    let text =
+        toml::to_string(&doc).map_err(|e| err("", format!("cannot re-serialise the case: {e}")))?;
     let case: Case = toml::from_str(&text).map_err(|e| {
         let span_key = key_of_error(&text, &e);
         err(&span_key, e.message().to_string())
     })?;
-    let loaded = LoadedCase { case, source: source.to_string(), text };
+    let loaded = LoadedCase {
+        case,
+        source: source.to_string(),
+        text,
+    };
     check_case(&loaded)?;
     Ok(loaded)
 }
@@ -360,7 +399,9 @@ pub fn parse_case(source: &str, text: &str, overrides: &[String]) -> Result<Load
 fn parse_override_value(raw: &str) -> toml::Value {
     let wrapped = format!("v = {raw}");
     match wrapped.parse::<toml::Table>() {
-        Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(raw.to_string())),
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or(toml::Value::String(raw.to_string())),
         Err(_) => toml::Value::String(raw.to_string()),
     }
 }
@@ -386,12 +427,17 @@ fn set_dotted(doc: &mut toml::Table, key: &str, value: toml::Value) -> Result<()
                     t.insert(part.to_string(), value);
                     return Ok(());
                 }
-                t.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                t.entry(part.to_string())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
             }
             toml::Value::Array(a) => {
-                let index: usize = part.parse().map_err(|_| format!("`{part}` should be an index into a list"))?;
+                let index: usize = part
+                    .parse()
+                    .map_err(|_| format!("`{part}` should be an index into a list"))?;
                 let len = a.len();
-                let slot = a.get_mut(index).ok_or_else(|| format!("index {index} is past the list's {len} entries"))?;
+                let slot = a
+                    .get_mut(index)
+                    .ok_or_else(|| format!("index {index} is past the list's {len} entries"))?;
                 if last {
                     *slot = value;
                     return Ok(());
@@ -406,14 +452,19 @@ fn set_dotted(doc: &mut toml::Table, key: &str, value: toml::Value) -> Result<()
 
 /// The dotted key at the error's span, found from the TOML text (best effort).
 fn key_of_error(text: &str, e: &toml::de::Error) -> String {
-    let Some(span) = e.span() else { return String::new() };
+    let Some(span) = e.span() else {
+        return String::new();
+    };
     let before = &text[..span.start.min(text.len())];
     let mut table = String::new();
     let mut index: std::collections::HashMap<String, usize> = Default::default();
     for line in before.lines() {
         let l = line.trim();
         if let Some(name) = l.strip_prefix("[[").and_then(|s| s.strip_suffix("]]")) {
-            let n = index.entry(name.to_string()).and_modify(|n| *n += 1).or_insert(0);
+            let n = index
+                .entry(name.to_string())
+                .and_modify(|n| *n += 1)
+                .or_insert(0);
             table = format!("{name}[{n}]");
         } else if let Some(name) = l.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
             table = name.to_string();
@@ -421,7 +472,12 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
     }
     let line_start = before.rfind('\n').map_or(0, |k| k + 1);
     let line = text[line_start..].lines().next().unwrap_or("");
-    let key = line.split('=').next().unwrap_or("").trim().trim_matches('"');
+    let key = line
+        .split('=')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .trim_matches('"');
     let key = if key.starts_with('[') { "" } else { key };
     match (table.is_empty(), key.is_empty()) {
         (true, _) => key.to_string(),
@@ -450,14 +506,26 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     positive("resolution.dx", c.resolution.dx)?;
     positive("time.end", c.time.end)?;
     positive("resolution.element_over_dx", c.resolution.element_over_dx)?;
-    if !(c.fluid.tait_exponent > 1.0) {
-        return e("fluid.tait_exponent", format!("expected a number above 1, found {}", c.fluid.tait_exponent));
+    if c.fluid.tait_exponent.is_nan() || c.fluid.tait_exponent <= 1.0 {
+        return e(
+            "fluid.tait_exponent",
+            format!("expected a number above 1, found {}", c.fluid.tait_exponent),
+        );
     }
     if !(1.0..=4.0).contains(&c.resolution.h_over_dx) {
-        return e("resolution.h_over_dx", format!("expected a value in [1, 4], found {}", c.resolution.h_over_dx));
+        return e(
+            "resolution.h_over_dx",
+            format!(
+                "expected a value in [1, 4], found {}",
+                c.resolution.h_over_dx
+            ),
+        );
     }
     if !(c.time.courant > 0.0 && c.time.courant <= 1.0) {
-        return e("time.courant", format!("expected a value in (0, 1], found {}", c.time.courant));
+        return e(
+            "time.courant",
+            format!("expected a value in (0, 1], found {}", c.time.courant),
+        );
     }
     if let Some(dt) = c.time.dt {
         positive("time.dt", dt)?;
@@ -466,10 +534,16 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         positive("time.min_dt", dt)?;
     }
     if !(c.fluid.delta >= 0.0 && c.fluid.delta <= 1.0) {
-        return e("fluid.delta", format!("expected a value in [0, 1], found {}", c.fluid.delta));
+        return e(
+            "fluid.delta",
+            format!("expected a value in [0, 1], found {}", c.fluid.delta),
+        );
     }
     if !c.fluid.background_pressure.is_finite() {
-        return e("fluid.background_pressure", "expected a finite number".into());
+        return e(
+            "fluid.background_pressure",
+            "expected a finite number".into(),
+        );
     }
     if !c.fluid.gravity.is_empty() {
         vector(loaded, "fluid.gravity", &c.fluid.gravity, d)?;
@@ -478,7 +552,10 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         return e("output", "intervals must be zero or positive".into());
     }
     if c.fluid_block.is_empty() {
-        return e("fluid_block", "expected at least one [[fluid_block]]: the case has no fluid".into());
+        return e(
+            "fluid_block",
+            "expected at least one [[fluid_block]]: the case has no fluid".into(),
+        );
     }
     for (k, b) in c.fluid_block.iter().enumerate() {
         let key = format!("fluid_block[{k}]");
@@ -488,40 +565,68 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
         if let Some(InitialPressure::Named(name)) = &b.pressure {
             if name != "hydrostatic" {
-                return e(&format!("{key}.pressure"), format!("expected \"hydrostatic\" or a number, found \"{name}\""));
+                return e(
+                    &format!("{key}.pressure"),
+                    format!("expected \"hydrostatic\" or a number, found \"{name}\""),
+                );
             }
         }
     }
     if c.wall.is_empty() && c.domain.is_none() {
-        return e("wall", "expected at least one [[wall]], or a [domain] for a case without walls".into());
+        return e(
+            "wall",
+            "expected at least one [[wall]], or a [domain] for a case without walls".into(),
+        );
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
         shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
-        let sides: &[&str] = if d == 2 { &bisph_core::geometry::BOX_SIDES_2D } else { &bisph_core::geometry::BOX_FACES_3D };
+        let sides: &[&str] = if d == 2 {
+            &bisph_core::geometry::BOX_SIDES_2D
+        } else {
+            &bisph_core::geometry::BOX_FACES_3D
+        };
         for o in &w.open {
             if !sides.contains(&o.as_str()) {
-                return e(&format!("{key}.open"), format!("expected sides among {sides:?}, found \"{o}\""));
+                return e(
+                    &format!("{key}.open"),
+                    format!("expected sides among {sides:?}, found \"{o}\""),
+                );
             }
         }
         if let Some(body) = &w.body {
             if !c.body.iter().any(|b| &b.name == body) {
-                return e(&format!("{key}.body"), format!("no [[body]] is named \"{body}\""));
+                return e(
+                    &format!("{key}.body"),
+                    format!("no [[body]] is named \"{body}\""),
+                );
             }
         }
     }
     for (k, b) in c.body.iter().enumerate() {
         let key = format!("body[{k}]");
         if b.name.is_empty() || c.body.iter().filter(|o| o.name == b.name).count() > 1 {
-            return e(&format!("{key}.name"), format!("expected a unique, non-empty name, found \"{}\"", b.name));
+            return e(
+                &format!("{key}.name"),
+                format!("expected a unique, non-empty name, found \"{}\"", b.name),
+            );
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
         }
         if let Some(m) = &b.motion {
-            for (name, v) in [("velocity", &m.velocity), ("amplitude", &m.amplitude), ("axis", &m.axis)] {
+            for (name, v) in [
+                ("velocity", &m.velocity),
+                ("amplitude", &m.amplitude),
+                ("axis", &m.axis),
+            ] {
                 if let Some(v) = v {
-                    vector(loaded, &format!("{key}.motion.{name}"), v, if name == "axis" { 3 } else { d })?;
+                    vector(
+                        loaded,
+                        &format!("{key}.motion.{name}"),
+                        v,
+                        if name == "axis" { 3 } else { d },
+                    )?;
                 }
             }
         }
@@ -532,7 +637,12 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
             return e("domain", "expected min < max in every direction".into());
         }
-        if dom.min.iter().zip(&dom.max).all(|(a, b)| b - a < c.resolution.dx) {
+        if dom
+            .min
+            .iter()
+            .zip(&dom.max)
+            .all(|(a, b)| b - a < c.resolution.dx)
+        {
             return e("resolution.dx", "dx is larger than the domain".into());
         }
     }
@@ -540,7 +650,13 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
         if p.kind != "pressure" && p.kind != "wall_pressure" {
-            return e(&format!("{key}.kind"), format!("expected \"pressure\" or \"wall_pressure\", found \"{}\"", p.kind));
+            return e(
+                &format!("{key}.kind"),
+                format!(
+                    "expected \"pressure\" or \"wall_pressure\", found \"{}\"",
+                    p.kind
+                ),
+            );
         }
     }
     Ok(())
@@ -579,11 +695,17 @@ fn shape_points(
         }
         "polygon" | "polyline" if d == 2 => {
             let Some(pts) = points else {
-                return Err(loaded.error(&format!("{key}.points"), "missing: a list of [x, y] vertices"));
+                return Err(loaded.error(
+                    &format!("{key}.points"),
+                    "missing: a list of [x, y] vertices",
+                ));
             };
             let needed = if shape == "polygon" { 3 } else { 2 };
             if pts.len() < needed {
-                return Err(loaded.error(&format!("{key}.points"), format!("expected at least {needed} vertices, found {}", pts.len())));
+                return Err(loaded.error(
+                    &format!("{key}.points"),
+                    format!("expected at least {needed} vertices, found {}", pts.len()),
+                ));
             }
             for (k, p) in pts.iter().enumerate() {
                 vector(loaded, &format!("{key}.points[{k}]"), p, 2)?;
@@ -591,8 +713,15 @@ fn shape_points(
             Ok(())
         }
         other => {
-            let allowed = if d == 2 { "\"box\", \"polygon\" or \"polyline\"" } else { "\"box\"" };
-            Err(loaded.error(&format!("{key}.shape"), format!("expected {allowed} in {d}-D, found \"{other}\"")))
+            let allowed = if d == 2 {
+                "\"box\", \"polygon\" or \"polyline\""
+            } else {
+                "\"box\""
+            };
+            Err(loaded.error(
+                &format!("{key}.shape"),
+                format!("expected {allowed} in {d}-D, found \"{other}\""),
+            ))
         }
     }
 }

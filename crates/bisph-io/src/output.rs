@@ -26,7 +26,10 @@ impl std::error::Error for OutputError {}
 
 /// Attaches the path to an I/O result.
 pub fn at<T>(path: &Path, r: io::Result<T>) -> Result<T, OutputError> {
-    r.map_err(|source| OutputError { path: path.to_path_buf(), source })
+    r.map_err(|source| OutputError {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Writes `bytes` to `path` through a temporary file and a rename.
@@ -46,9 +49,15 @@ impl Series {
     /// Creates the file with its header.
     pub fn create(path: PathBuf, header: &[String]) -> Result<Self, OutputError> {
         let file = at(&path, File::create(&path))?;
-        let mut s = Series { path, out: BufWriter::new(file) };
+        let mut s = Series {
+            path,
+            out: BufWriter::new(file),
+        };
         let line = header.join(",");
-        at(&s.path, writeln!(s.out, "{line}").and_then(|_| s.out.flush()))?;
+        at(
+            &s.path,
+            writeln!(s.out, "{line}").and_then(|_| s.out.flush()),
+        )?;
         Ok(s)
     }
 
@@ -61,7 +70,10 @@ impl Series {
             }
             line.push_str(&format!("{v:e}"));
         }
-        at(&self.path, writeln!(self.out, "{line}").and_then(|_| self.out.flush()))
+        at(
+            &self.path,
+            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
+        )
     }
 
     /// Appends a row whose second column is a name.
@@ -70,7 +82,10 @@ impl Series {
         for v in values {
             line.push_str(&format!(",{v:e}"));
         }
-        at(&self.path, writeln!(self.out, "{line}").and_then(|_| self.out.flush()))
+        at(
+            &self.path,
+            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
+        )
     }
 }
 
@@ -87,7 +102,12 @@ impl Frames {
     pub fn new(dir: &Path) -> Result<Self, OutputError> {
         let vtk = dir.join("vtk");
         at(&vtk, std::fs::create_dir_all(&vtk))?;
-        Ok(Frames { dir: dir.to_path_buf(), fluid: PvdCollection::new(), walls: PvdCollection::new(), count: 0 })
+        Ok(Frames {
+            dir: dir.to_path_buf(),
+            fluid: PvdCollection::new(),
+            walls: PvdCollection::new(),
+            count: 0,
+        })
     }
 
     /// Number of frames written.
@@ -101,6 +121,7 @@ impl Frames {
         let f = &sim.fluid;
         let points: Vec<[f64; 3]> = f.position.iter().map(|r| r.to_xyz()).collect();
         let velocity: Vec<f64> = f.velocity.iter().flat_map(|u| u.to_xyz()).collect();
+        let acceleration: Vec<f64> = f.acceleration.iter().flat_map(|a| a.to_xyz()).collect();
         let id: Vec<f64> = f.id.iter().map(|&i| i as f64).collect();
         let fluid_name = format!("vtk/fluid_{k:06}.vtu");
         let path = self.dir.join(&fluid_name);
@@ -110,10 +131,31 @@ impl Frames {
                 &path,
                 &points,
                 &[
-                    DataArray { name: "velocity", components: 3, values: &velocity },
-                    DataArray { name: "pressure", components: 1, values: &f.pressure },
-                    DataArray { name: "density", components: 1, values: &f.density },
-                    DataArray { name: "id", components: 1, values: &id },
+                    DataArray {
+                        name: "velocity",
+                        components: 3,
+                        values: &velocity,
+                    },
+                    DataArray {
+                        name: "acceleration",
+                        components: 3,
+                        values: &acceleration,
+                    },
+                    DataArray {
+                        name: "pressure",
+                        components: 1,
+                        values: &f.pressure,
+                    },
+                    DataArray {
+                        name: "density",
+                        components: 1,
+                        values: &f.density,
+                    },
+                    DataArray {
+                        name: "id",
+                        components: 1,
+                        values: &id,
+                    },
                 ],
             ),
         )?;
@@ -124,7 +166,7 @@ impl Frames {
         let mut cells = Vec::with_capacity(e.len());
         for j in 0..e.len() {
             let start = vertices.len() as u32;
-            let corners = sim.walls.current_corners(j, sim.time);
+            let corners = e.current_corners(j);
             vertices.extend(corners.iter().map(|c| c.to_xyz()));
             cells.push((start..vertices.len() as u32).collect::<Vec<u32>>());
         }
@@ -140,11 +182,31 @@ impl Frames {
                 &vertices,
                 &cells,
                 &[
-                    DataArray { name: "normal", components: 3, values: &normal },
-                    DataArray { name: "area", components: 1, values: &e.area },
-                    DataArray { name: "pressure", components: 1, values: &e.pressure },
-                    DataArray { name: "velocity", components: 3, values: &wall_velocity },
-                    DataArray { name: "body", components: 1, values: &body },
+                    DataArray {
+                        name: "normal",
+                        components: 3,
+                        values: &normal,
+                    },
+                    DataArray {
+                        name: "area",
+                        components: 1,
+                        values: &e.area,
+                    },
+                    DataArray {
+                        name: "pressure",
+                        components: 1,
+                        values: &e.pressure,
+                    },
+                    DataArray {
+                        name: "velocity",
+                        components: 3,
+                        values: &wall_velocity,
+                    },
+                    DataArray {
+                        name: "body",
+                        components: 1,
+                        values: &body,
+                    },
                 ],
             ),
         )?;

@@ -94,7 +94,11 @@ pub struct Progress {
 }
 
 /// Runs the case in its dimension; see [`run`].
-pub fn run_case(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut(Progress)) -> Result<Summary, RunError> {
+pub fn run_case(
+    loaded: &LoadedCase,
+    out: &Path,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
     if loaded.case.dim == 2 {
         run::<glam::DVec2>(loaded, out, progress)
     } else {
@@ -104,7 +108,11 @@ pub fn run_case(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut(Progre
 
 /// Builds and runs a case, writing `energy.csv`, `forces.csv`, `probes.csv`, VTK frames,
 /// `summary.json`, plots and a copy of the case into `out`.
-pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut(Progress)) -> Result<Summary, RunError> {
+pub fn run<V: CaseDim>(
+    loaded: &LoadedCase,
+    out: &Path,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
     let mut sim: Simulation<V> = build_simulation(loaded).map_err(RunError::Case)?;
     at(out, std::fs::create_dir_all(out))?;
     write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
@@ -113,9 +121,22 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
 
     let mut energy_csv = Series::create(
         out.join("energy.csv"),
-        &["t", "kinetic", "compressible", "potential", "wall_work", "total"].map(String::from),
+        &[
+            "t",
+            "kinetic",
+            "compressible",
+            "potential",
+            "wall_work",
+            "total",
+        ]
+        .map(String::from),
     )?;
-    let mut force_header = vec!["t".to_string(), "body".to_string(), "fx".into(), "fy".into()];
+    let mut force_header = vec![
+        "t".to_string(),
+        "body".to_string(),
+        "fx".into(),
+        "fy".into(),
+    ];
     if V::DIM == 3 {
         force_header.extend(["fz", "mx", "my", "mz"].map(String::from));
     }
@@ -142,7 +163,14 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
             let e = sim.energy();
             max_drift = max_drift.max((e.total - e0.total).abs() / scale);
             max_speed = max_speed.max(sim.max_speed());
-            let row = [t, e.kinetic, e.compressible, e.potential, e.wall_work, e.total];
+            let row = [
+                t,
+                e.kinetic,
+                e.compressible,
+                e.potential,
+                e.wall_work,
+                e.total,
+            ];
             energy_csv.row(&row)?;
             history.push(row);
             for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
@@ -156,7 +184,11 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
             row.extend(sim.sample_probes());
             probes_csv.row(&row)?;
             probe_history.push(row);
-            next_series = if case.output.series_interval > 0.0 { next_series + case.output.series_interval } else { t };
+            next_series = if case.output.series_interval > 0.0 {
+                next_series + case.output.series_interval
+            } else {
+                t
+            };
             while case.output.series_interval > 0.0 && next_series <= t {
                 next_series += case.output.series_interval;
             }
@@ -167,7 +199,11 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
                 next_frame += case.output.vtk_interval;
             }
         }
-        progress(Progress { time: t, end, step: sim.step });
+        progress(Progress {
+            time: t,
+            end,
+            step: sim.step,
+        });
         if last {
             break;
         }
@@ -190,7 +226,8 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
         steps: sim.step,
         time: sim.time,
         wall_seconds,
-        particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64 / wall_seconds.max(1e-9),
+        particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
+            / wall_seconds.max(1e-9),
         energy_drift_relative: (e_final.total - e0.total) / scale,
         energy_scale: scale,
         energy_total_initial: e0.total,
@@ -213,7 +250,12 @@ pub fn run<V: CaseDim>(loaded: &LoadedCase, out: &Path, progress: &mut dyn FnMut
     }
 }
 
-fn write_plots(out: &Path, history: &[[f64; 6]], probe_header: &[String], probes: &[Vec<f64>]) -> Result<(), OutputError> {
+fn write_plots(
+    out: &Path,
+    history: &[[f64; 6]],
+    probe_header: &[String],
+    probes: &[Vec<f64>],
+) -> Result<(), OutputError> {
     let column = |k: usize| history.iter().map(|r| r[k]).collect::<Vec<f64>>();
     let t = column(0);
     let e0 = history.first().map(|r| r[5]).unwrap_or(0.0);
@@ -222,9 +264,24 @@ fn write_plots(out: &Path, history: &[[f64; 6]], probe_header: &[String], probes
         .iter()
         .enumerate()
         .map(|(k, name)| {
-            let base = if *name == "potential" || *name == "total" { history.first().map(|r| r[k + 1]).unwrap_or(0.0) } else { 0.0 };
+            let base = if *name == "potential" || *name == "total" {
+                history.first().map(|r| r[k + 1]).unwrap_or(0.0)
+            } else {
+                0.0
+            };
             let y = column(k + 1).iter().map(|v| v - base).collect();
-            (PlotSeries { label: if base != 0.0 { format!("{name} - initial") } else { name.to_string() }, x: t.clone(), y }, Style::Line)
+            (
+                PlotSeries {
+                    label: if base != 0.0 {
+                        format!("{name} - initial")
+                    } else {
+                        name.to_string()
+                    },
+                    x: t.clone(),
+                    y,
+                },
+                Style::Line,
+            )
         })
         .collect();
     let plot = Plot {
@@ -234,18 +291,36 @@ fn write_plots(out: &Path, history: &[[f64; 6]], probe_header: &[String], probes
         series,
     };
     let path = out.join("energy.png");
-    write_png(&plot, &path, 1000, 600).map_err(|e| OutputError { path: path.clone(), source: std::io::Error::other(e.0) })?;
+    write_png(&plot, &path, 1000, 600).map_err(|e| OutputError {
+        path: path.clone(),
+        source: std::io::Error::other(e.0),
+    })?;
     if probe_header.len() > 1 {
         let series = (1..probe_header.len())
             .map(|k| {
                 let y = probes.iter().map(|r| r[k]).collect();
                 let x = probes.iter().map(|r| r[0]).collect();
-                (PlotSeries { label: probe_header[k].clone(), x, y }, Style::Line)
+                (
+                    PlotSeries {
+                        label: probe_header[k].clone(),
+                        x,
+                        y,
+                    },
+                    Style::Line,
+                )
             })
             .collect();
-        let plot = Plot { title: "Probes".into(), x_label: "t [s]".into(), y_label: "pressure [Pa]".into(), series };
+        let plot = Plot {
+            title: "Probes".into(),
+            x_label: "t [s]".into(),
+            y_label: "pressure [Pa]".into(),
+            series,
+        };
         let path = out.join("probes.png");
-        write_png(&plot, &path, 1000, 600).map_err(|e| OutputError { path: path.clone(), source: std::io::Error::other(e.0) })?;
+        write_png(&plot, &path, 1000, 600).map_err(|e| OutputError {
+            path: path.clone(),
+            source: std::io::Error::other(e.0),
+        })?;
     }
     Ok(())
 }

@@ -44,11 +44,16 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
             format!("resolution.h_over_dx={h_over_dx}"),
             "output.plots=false".into(),
         ];
-        let loaded = parse_case("<bench>", bisph_io::case::DEFAULT_CASE, &overrides).map_err(|e| (1, e.to_string()))?;
+        let loaded = parse_case("<bench>", bisph_io::case::DEFAULT_CASE, &overrides)
+            .map_err(|e| (1, e.to_string()))?;
         for &threads in &args.threads {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| (1, e.to_string()))?;
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| (1, e.to_string()))?;
             let row = pool.install(|| -> Result<_, (u8, String)> {
-                let mut sim: Simulation<DVec2> = build_simulation(&loaded).map_err(|e| (1, e.to_string()))?;
+                let mut sim: Simulation<DVec2> =
+                    build_simulation(&loaded).map_err(|e| (1, e.to_string()))?;
                 for _ in 0..3 {
                     sim.advance(None).map_err(|e| (3, e.to_string()))?;
                 }
@@ -60,12 +65,23 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                 let seconds = start.elapsed().as_secs_f64();
                 let n = sim.fluid.len() as f64;
                 let steps = args.steps as f64;
-                Ok((n, pairs_per_step / n, n * steps / seconds, pairs_per_step * steps / seconds))
+                Ok((
+                    n,
+                    pairs_per_step / n,
+                    n * steps / seconds,
+                    pairs_per_step * steps / seconds,
+                ))
             })?;
             let (n, neighbours, psps, pairs) = row;
             println!(
                 "{:>8.3} {:>7} {:>10} {:>8.1} {:>14.3e} {:>14.3e} {:>8.2}",
-                h_over_dx, threads, n, neighbours, psps, pairs, 1e9 / pairs
+                h_over_dx,
+                threads,
+                n,
+                neighbours,
+                psps,
+                pairs,
+                1e9 / pairs
             );
             results.push(json!({
                 "case": "dam-break-2d", "h_over_dx": h_over_dx, "threads": threads, "particles": n,
@@ -77,7 +93,8 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     }
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&results).unwrap_or_default();
-        std::fs::write(&path, text).map_err(|e| (1, format!("cannot write {}: {e}", path.display())))?;
+        std::fs::write(&path, text)
+            .map_err(|e| (1, format!("cannot write {}: {e}", path.display())))?;
     }
     Ok(())
 }

@@ -74,19 +74,29 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
 
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
     set_threads(args.threads)?;
-    let loaded = load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
-    let out = args.out.unwrap_or_else(|| bisph_io::case::default_out_dir(&loaded.case));
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+    let loaded =
+        load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
+    let out = args
+        .out
+        .unwrap_or_else(|| bisph_io::case::default_out_dir(&loaded.case));
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1000)
+    };
     bar.set_style(
         ProgressStyle::with_template("{bar:40} t = {msg} [{elapsed_precise} < {eta_precise}]")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let started = std::time::Instant::now();
     let mut report = |p: Progress| {
-        if p.step % 20 == 0 || p.time >= p.end {
+        if p.step.is_multiple_of(20) || p.time >= p.end {
             bar.set_position((1000.0 * p.time / p.end) as u64);
             let rate = p.step as f64 / started.elapsed().as_secs_f64().max(1e-9);
-            bar.set_message(format!("{:.4} s, step {}, {:.0} steps/s", p.time, p.step, rate));
+            bar.set_message(format!(
+                "{:.4} s, step {}, {:.0} steps/s",
+                p.time, p.step, rate
+            ));
         }
     };
     let result = run_case(&loaded, &out, &mut report);
@@ -106,7 +116,9 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             );
             Ok(())
         }
-        Err(RunError::Stopped(e)) => Err((3, format!("{e}; outputs so far kept in {}", out.display()))),
+        Err(RunError::Stopped(e)) => {
+            Err((3, format!("{e}; outputs so far kept in {}", out.display())))
+        }
         Err(e) => Err((1, e.to_string())),
     }
 }

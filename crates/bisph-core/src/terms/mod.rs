@@ -83,9 +83,14 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         }
     });
     let wall = wall_model.particle_terms(kernel, x_i, u_i, p_i, elements, wall_grid);
-    if W::RENORMALISE && shepard > 0.0 {
+    let gamma = if W::RENORMALISE {
+        wall_model.renormalisation(kernel, x_i, shepard, elements, wall_grid)
+    } else {
+        1.0
+    };
+    if W::RENORMALISE && gamma > 0.0 {
         // Paper 1 eqs 33-34: the wall part is the renormalised total minus the fluid part.
-        let scale = 1.0 / shepard;
+        let scale = 1.0 / gamma;
         let total_grad = (grad_p + wall.pressure_gradient) * scale;
         let total_div = (div_u + wall.velocity_divergence) * scale;
         return Operators {

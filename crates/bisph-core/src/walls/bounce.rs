@@ -30,8 +30,12 @@ pub fn elastic_bounce<V: Vector>(
     }
     lost_energy.clear();
     lost_energy.resize(position.len(), 0.0);
-    velocity.par_iter_mut().zip(lost_energy.par_iter_mut()).enumerate().with_min_len(256).for_each(
-        |(i, (u, lost))| {
+    velocity
+        .par_iter_mut()
+        .zip(lost_energy.par_iter_mut())
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, (u, lost))| {
             let x = position[i];
             let before = u.length_squared();
             grid.for_each_candidate(x, |j| {
@@ -50,7 +54,6 @@ pub fn elastic_bounce<V: Vector>(
                 }
             });
             *lost = 0.5 * mass[i] * (before - u.length_squared());
-        },
-    );
+        });
     crate::energy::deterministic_sum(lost_energy.len(), |i| lost_energy[i])
 }

@@ -6,6 +6,7 @@
 pub mod bodies;
 pub mod bounce;
 pub mod energy_bi;
+pub mod geometric_shepard;
 pub mod shepard_bi;
 
 use crate::dim::Vector;
@@ -42,6 +43,8 @@ pub struct BoundaryElements<V: Vector> {
     pub reference_corners: Vec<V>,
     /// Offsets into `reference_corners` (length = elements + 1).
     pub corner_start: Vec<u32>,
+    /// Current corner points (same layout as `reference_corners`).
+    pub corners: Vec<V>,
 }
 
 impl<V: Vector> BoundaryElements<V> {
@@ -66,16 +69,27 @@ impl<V: Vector> BoundaryElements<V> {
         self.velocity.push(V::ZERO);
         self.body.push(body);
         self.pressure.push(0.0);
-        self.reach.push(corners.iter().map(|&c| (c - centre).length()).fold(0.0, f64::max));
+        self.reach.push(
+            corners
+                .iter()
+                .map(|&c| (c - centre).length())
+                .fold(0.0, f64::max),
+        );
         self.reference_centre.push(centre);
         self.reference_normal.push(normal);
         self.reference_corners.extend_from_slice(corners);
+        self.corners.extend_from_slice(corners);
         self.corner_start.push(self.reference_corners.len() as u32);
     }
 
     /// Corner points of element `j` in the reference configuration.
-    pub fn corners(&self, j: usize) -> &[V] {
+    pub fn reference_corners(&self, j: usize) -> &[V] {
         &self.reference_corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize]
+    }
+
+    /// Current corner points of element `j`.
+    pub fn current_corners(&self, j: usize) -> &[V] {
+        &self.corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize]
     }
 }
 
@@ -128,19 +142,12 @@ impl<V: Vector> Walls<V> {
             e.centre[j] = c + arm;
             e.normal[j] = e.reference_normal[j].rotated_by(k.rotation);
             e.velocity[j] = k.velocity + V::angular_cross(k.angular_velocity, arm);
+            let body_centre = self.bodies[b].centre;
+            for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
+                e.corners[m] = c + (e.reference_corners[m] - body_centre).rotated_by(k.rotation);
+            }
         }
         self.grid.rebuild(&self.elements.centre);
-    }
-
-    /// Current corner points of element `j` (reference corners moved with its body).
-    pub fn current_corners(&self, j: usize, t: f64) -> Vec<V> {
-        let b = &self.bodies[self.elements.body[j] as usize];
-        let k = b.motion.kinematics(t);
-        self.elements
-            .corners(j)
-            .iter()
-            .map(|&p| b.centre + k.displacement + (p - b.centre).rotated_by(k.rotation))
-            .collect()
     }
 
     /// Pressure force `sum_j P_j n_j s_j` and torque about the body's current centre, per body
@@ -196,6 +203,19 @@ pub trait WallModel<V: Vector>: Sync {
         fluid: &FluidState<V>,
         fluid_grid: &CellGrid<V>,
     );
+
+    /// The Shepard factor `gamma_i` that divides the operators of a particle at `x` when
+    /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid.
+    fn renormalisation(
+        &self,
+        _kernel: &Wendland,
+        _x: V,
+        discrete: f64,
+        _elements: &BoundaryElements<V>,
+        _grid: &CellGrid<V>,
+    ) -> f64 {
+        discrete
+    }
 
     /// Wall sums for a fluid particle at `x` with velocity `u` and pressure `p`.
     fn particle_terms(

@@ -3,7 +3,8 @@
 //! - `<grad p>_i = (1/gamma_i) [ -sum_j (p_j + p_i) grad W_ij V_j + sum_k (p_k + p_i) n_k W_ik s_k ]`;
 //! - `<div u>_i = (1/gamma_i) [ -sum_j (u_j - u_i) . grad W_ij V_j + sum_k (U_k - u_i) . n_k W_ik s_k ]`;
 //!
-//! with the discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 2, eq 4) and the wall
+//! with the discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 2, eq 4) or the geometric
+//! one (paper 2, from the walls alone), and the wall
 //! pressure `p_k` extrapolated from the fluid with the hydrostatic correction,
 //! `p_k = sum_j (p_j + rho_j g . (r_k - r_j)) W_kj V_j / sum_j W_kj V_j`.
 //! These operators are not skew-adjoint: energy is not conserved (paper 1, section 4).
@@ -15,11 +16,23 @@ use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
+/// How the Shepard factor `gamma_i` is obtained.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShepardKind {
+    /// `gamma_i = sum_j W_ij V_j` over the fluid (paper 2, eq 4); free surfaces lower it too.
+    #[default]
+    Discrete,
+    /// From the wall elements alone (paper 2; [`super::geometric_shepard`]).
+    Geometric,
+}
+
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShepardWalls<V> {
     /// Gravity, for the hydrostatic correction of the extrapolated wall pressure.
     pub gravity: V,
+    /// Which Shepard factor renormalises the operators.
+    pub shepard: ShepardKind,
 }
 
 impl<V: Vector> WallModel<V> for ShepardWalls<V> {
@@ -34,16 +47,43 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
     ) {
         let centres = &elements.centre;
         let g = self.gravity;
-        elements.pressure.par_iter_mut().enumerate().for_each(|(k, pk)| {
-            let (mut weighted, mut shepard) = (0.0, 0.0);
-            fluid_grid.for_each_neighbour(centres[k], fluid.position, kernel.support, |j, r_kj, r| {
-                let wv = kernel.value(r) * fluid.mass[j] / fluid.density[j];
-                // r_kj = r_j - r_k, so g . (r_k - r_j) = -g . r_kj.
-                weighted += (fluid.pressure[j] - fluid.density[j] * g.dot(r_kj)) * wv;
-                shepard += wv;
+        elements
+            .pressure
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, pk)| {
+                let (mut weighted, mut shepard) = (0.0, 0.0);
+                fluid_grid.for_each_neighbour(
+                    centres[k],
+                    fluid.position,
+                    kernel.support,
+                    |j, r_kj, r| {
+                        let wv = kernel.value(r) * fluid.mass[j] / fluid.density[j];
+                        // r_kj = r_j - r_k, so g . (r_k - r_j) = -g . r_kj.
+                        weighted += (fluid.pressure[j] - fluid.density[j] * g.dot(r_kj)) * wv;
+                        shepard += wv;
+                    },
+                );
+                *pk = if shepard > 0.0 {
+                    weighted / shepard
+                } else {
+                    0.0
+                };
             });
-            *pk = if shepard > 0.0 { weighted / shepard } else { 0.0 };
-        });
+    }
+
+    fn renormalisation(
+        &self,
+        kernel: &Wendland,
+        x: V,
+        discrete: f64,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> f64 {
+        match self.shepard {
+            ShepardKind::Discrete => discrete,
+            ShepardKind::Geometric => super::geometric_shepard::gamma(kernel, x, elements, grid),
+        }
     }
 
     #[inline(always)]
@@ -64,6 +104,9 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
             pressure_gradient += n * ((elements.pressure[k] + p) * ws);
             velocity_divergence += (elements.velocity[k] - u).dot(n) * ws;
         });
-        WallTerms { pressure_gradient, velocity_divergence }
+        WallTerms {
+            pressure_gradient,
+            velocity_divergence,
+        }
     }
 }
