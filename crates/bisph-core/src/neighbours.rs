@@ -2,10 +2,11 @@
 //!
 //! Cells have the side of the kernel support, so every neighbour of a point lies in the
 //! `3^d` cells around it. The grid is rebuilt every step by a counting sort (no per-step
-//! allocation once the buffers have grown); for the fluid the sort order is also used to
+//! allocation once the buffers have grown; cell indices are computed in parallel); for the fluid the sort order is also used to
 //! reorder the particles themselves, so a cell's particles are contiguous in memory.
 
 use crate::dim::Vector;
+use rayon::prelude::*;
 
 /// Cell lists over a set of points: `items[cell_start[c]..cell_start[c + 1]]` are the points
 /// in cell `c`.
@@ -67,8 +68,13 @@ impl<V: Vector> CellGrid<V> {
         self.dims = dims;
         let cells = dims[0] * dims[1] * dims[2];
         let mut cell_of = std::mem::take(&mut self.cell_of);
-        cell_of.clear();
-        cell_of.extend(points.iter().map(|&p| self.cell_index(p) as u32));
+        cell_of.resize(n, 0);
+        let this = &*self;
+        cell_of
+            .par_iter_mut()
+            .zip(points.par_iter())
+            .with_min_len(4096)
+            .for_each(|(c, &p)| *c = this.cell_index(p) as u32);
         self.cell_of = cell_of;
         self.cell_start.clear();
         self.cell_start.resize(cells + 1, 0);
