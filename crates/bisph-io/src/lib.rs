@@ -9,6 +9,7 @@ pub mod case;
 pub mod output;
 pub mod plot;
 pub mod runner;
+pub mod validate;
 pub mod vtk;
 
 pub use case::{load_case, parse_case, Case, CaseError, LoadedCase};

@@ -1,0 +1,152 @@
+//! `bisph validate`: validation cases, each comparing measured quantities with a reference
+//! and a tolerance, and a report (table on stdout, `report.md` with plots).
+//!
+//! A validation case implements [`ValidationCase`]; [`registry`] lists them all. Cases run at
+//! a quick resolution in CI (`--quick`) and at full resolution otherwise.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// How a value is compared with its reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance {
+    /// `|value - reference| <= tol`.
+    Absolute(f64),
+    /// `|value - reference| <= tol * |reference|`.
+    Relative(f64),
+    /// `value <= reference` (the reference is an upper bound).
+    AtMost,
+    /// `value >= reference` (the reference is a lower bound).
+    AtLeast,
+}
+
+/// One measured quantity against its reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Check {
+    /// What is measured.
+    pub quantity: String,
+    /// The measured value.
+    pub value: f64,
+    /// The reference (analytic, paper or experiment value, or a bound).
+    pub reference: f64,
+    /// How they are compared.
+    pub tolerance: Tolerance,
+    /// Where the reference comes from.
+    pub source: String,
+}
+
+impl Check {
+    /// A check of `value` against `reference` with `tolerance`.
+    pub fn new(quantity: &str, value: f64, reference: f64, tolerance: Tolerance, source: &str) -> Self {
+        Check { quantity: quantity.into(), value, reference, tolerance, source: source.into() }
+    }
+
+    /// `true` when the value is within tolerance (a NaN never passes).
+    pub fn passed(&self) -> bool {
+        let (v, r) = (self.value, self.reference);
+        if !v.is_finite() {
+            return false;
+        }
+        match self.tolerance {
+            Tolerance::Absolute(t) => (v - r).abs() <= t,
+            Tolerance::Relative(t) => (v - r).abs() <= t * r.abs(),
+            Tolerance::AtMost => v <= r,
+            Tolerance::AtLeast => v >= r,
+        }
+    }
+
+    fn tolerance_text(&self) -> String {
+        match self.tolerance {
+            Tolerance::Absolute(t) => format!("± {t:.3e}"),
+            Tolerance::Relative(t) => format!("± {:.3}%", 100.0 * t),
+            Tolerance::AtMost => "at most".into(),
+            Tolerance::AtLeast => "at least".into(),
+        }
+    }
+}
+
+/// What one case produced.
+#[derive(Debug, Clone, Default)]
+pub struct CaseReport {
+    /// Case name.
+    pub name: String,
+    /// Its checks.
+    pub checks: Vec<Check>,
+    /// Plots written (paths relative to the report directory are best).
+    pub plots: Vec<PathBuf>,
+    /// Free text: figures worth reading beside the checks.
+    pub notes: Vec<String>,
+    /// Wall-clock seconds the case took.
+    pub wall_seconds: f64,
+}
+
+/// A validation case.
+pub trait ValidationCase: Sync {
+    /// Name used on the command line.
+    fn name(&self) -> &'static str;
+    /// One line saying what it checks.
+    fn description(&self) -> &'static str;
+    /// Runs the case (quick or full resolution) writing its outputs under `out`.
+    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String>;
+}
+
+/// Every validation case bisph knows.
+pub fn registry() -> Vec<Box<dyn ValidationCase>> {
+    Vec::new()
+}
+
+/// The table printed on stdout.
+pub fn table(reports: &[CaseReport]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<22} {:<44} {:>13} {:>13} {:>12} {:>5}",
+        "case", "quantity", "value", "reference", "tolerance", "pass"
+    );
+    for r in reports {
+        for c in &r.checks {
+            let _ = writeln!(
+                s,
+                "{:<22} {:<44} {:>13.5e} {:>13.5e} {:>12} {:>5}",
+                r.name,
+                c.quantity,
+                c.value,
+                c.reference,
+                c.tolerance_text(),
+                if c.passed() { "yes" } else { "NO" }
+            );
+        }
+    }
+    s
+}
+
+/// `report.md`: the table, the notes and the plots of every case.
+pub fn markdown(reports: &[CaseReport], quick: bool) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# bisph validation report ({})\n", if quick { "quick" } else { "full" });
+    for r in reports {
+        let _ = writeln!(s, "## {} ({:.1} s)\n", r.name, r.wall_seconds);
+        let _ = writeln!(s, "| quantity | value | reference | tolerance | pass | source |");
+        let _ = writeln!(s, "| --- | ---: | ---: | --- | --- | --- |");
+        for c in &r.checks {
+            let _ = writeln!(
+                s,
+                "| {} | {:.5e} | {:.5e} | {} | {} | {} |",
+                c.quantity,
+                c.value,
+                c.reference,
+                c.tolerance_text(),
+                if c.passed() { "yes" } else { "**no**" },
+                c.source
+            );
+        }
+        for n in &r.notes {
+            let _ = writeln!(s, "\n{n}");
+        }
+        for p in &r.plots {
+            let _ = writeln!(s, "\n![{}]({})", p.display(), p.display());
+        }
+        let _ = writeln!(s);
+    }
+    s
+}
