@@ -21,6 +21,23 @@ enum Command {
     Run(RunArgs),
     /// Run the standard throughput benchmark.
     Bench(bench::BenchArgs),
+    /// Run validation cases and compare them with their references.
+    Validate(ValidateArgs),
+}
+
+#[derive(clap::Args)]
+struct ValidateArgs {
+    /// Cases to run (default: all).
+    names: Vec<String>,
+    /// Quick (CI) resolution.
+    #[arg(long)]
+    quick: bool,
+    /// Output directory (default: out/validate).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// List the cases and exit.
+    #[arg(long)]
+    list: bool,
 }
 
 #[derive(clap::Args, Default)]
@@ -48,6 +65,7 @@ fn main() -> ExitCode {
         None => run(RunArgs::default()),
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(args)) => bench::bench(args),
+        Some(Command::Validate(args)) => validate(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -120,5 +138,53 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             Err((3, format!("{e}; outputs so far kept in {}", out.display())))
         }
         Err(e) => Err((1, e.to_string())),
+    }
+}
+
+fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
+    use bisph_io::validate::{markdown, registry, table};
+    let cases = registry();
+    if args.list {
+        for c in &cases {
+            println!("{:<24} {}", c.name(), c.description());
+        }
+        return Ok(());
+    }
+    for name in &args.names {
+        if !cases.iter().any(|c| c.name() == name) {
+            let known: Vec<&str> = cases.iter().map(|c| c.name()).collect();
+            return Err((1, format!("unknown validation case `{name}`; known: {}", known.join(", "))));
+        }
+    }
+    let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
+    std::fs::create_dir_all(&out).map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
+    let mut reports = Vec::new();
+    let mut failed = Vec::new();
+    for case in cases.iter().filter(|c| args.names.is_empty() || args.names.iter().any(|n| n == c.name())) {
+        eprintln!("validating {} ({})", case.name(), if args.quick { "quick" } else { "full" });
+        let started = std::time::Instant::now();
+        match case.run(args.quick, &out.join(case.name())) {
+            Ok(mut report) => {
+                report.wall_seconds = started.elapsed().as_secs_f64();
+                if report.checks.iter().any(|c| !c.passed()) {
+                    failed.push(case.name().to_string());
+                }
+                reports.push(report);
+            }
+            Err(e) => {
+                eprintln!("error: validation case {} failed to run: {e}", case.name());
+                failed.push(case.name().to_string());
+            }
+        }
+    }
+    print!("{}", table(&reports));
+    let report_path = out.join("report.md");
+    std::fs::write(&report_path, markdown(&reports, args.quick))
+        .map_err(|e| (1, format!("cannot write {}: {e}", report_path.display())))?;
+    println!("report: {}", report_path.display());
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err((2, format!("out of tolerance or failed: {}", failed.join(", "))))
     }
 }
