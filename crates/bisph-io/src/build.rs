@@ -1,8 +1,11 @@
 //! From a checked case to a ready [`Simulation`].
 
+use crate::case::ToleranceReference;
 use crate::case::{Case, FluidBlock, InitialPressure, LoadedCase, WallSpec};
+use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::{self, ElementShape};
 use bisph_core::probes::{Probe, ProbeKind};
+use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
 use bisph_core::walls::{Body, BoundaryElements, Motion, PrescribedMotion, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
@@ -241,6 +244,34 @@ pub fn build_simulation<V: CaseDim>(
         },
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
+        integrator: Integrator::Verlet,
+        // set below, once the initial energies are known
+    };
+    let integrator = match case.time.integrator {
+        crate::case::IntegratorName::Verlet => Integrator::Verlet,
+        crate::case::IntegratorName::Midpoint => {
+            let m = &case.midpoint;
+            let (kinetic, compressible, _) = fluid_energies(&fluid, &eos, gravity);
+            let potential = energy_scale(&fluid, &eos, gravity) - kinetic - compressible.abs();
+            let reference = match m.tolerance_reference {
+                ToleranceReference::Absolute => 1.0,
+                ToleranceReference::Potential => potential,
+                ToleranceReference::Kinetic => kinetic,
+                ToleranceReference::Compressible => compressible.abs(),
+                ToleranceReference::Given => m.reference_energy.unwrap_or(1.0),
+            };
+            Integrator::Midpoint(MidpointParams {
+                max_iterations: m.max_iterations,
+                tolerance: m.tolerance * reference,
+                min_decrease: m.min_decrease,
+                relax_increment: m.relax_increment,
+                initial_relaxation: m.initial_relaxation,
+            })
+        }
+    };
+    let config = SimConfig {
+        integrator,
+        ..config
     };
     let walls = Walls::new(elements, bodies, kernel.support);
     Ok(Simulation::new(config, fluid, walls, probes))

@@ -132,6 +132,87 @@ pub struct TimeSection {
     pub dt: Option<f64>,
     /// Smallest allowed time step [s]; the run stops below it (default 1e-6 of `h / c0`).
     pub min_dt: Option<f64>,
+    /// `"verlet"` (explicit) or `"midpoint"` (semi-implicit, paper 1).
+    #[serde(default)]
+    pub integrator: IntegratorName,
+}
+
+/// Time integrator name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum IntegratorName {
+    /// Explicit velocity Verlet.
+    #[default]
+    Verlet,
+    /// Semi-implicit midpoint (paper 1).
+    Midpoint,
+}
+
+/// Energy a relative midpoint tolerance refers to.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ToleranceReference {
+    /// The tolerance is an absolute power.
+    #[default]
+    Absolute,
+    /// Times the initial potential energy above the lowest particle.
+    Potential,
+    /// Times the initial kinetic energy.
+    Kinetic,
+    /// Times the initial compression energy.
+    Compressible,
+    /// Times an energy given in `reference_energy`.
+    Given,
+}
+
+/// `[midpoint]`: the semi-implicit midpoint iterations.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MidpointSection {
+    /// Most iterations per step.
+    #[serde(default = "default_iterations")]
+    pub max_iterations: u32,
+    /// Residue tolerance (paper 1, eq 53), absolute or relative to `tolerance_reference`.
+    #[serde(default)]
+    pub tolerance: f64,
+    /// What `tolerance` is relative to.
+    #[serde(default)]
+    pub tolerance_reference: ToleranceReference,
+    /// The energy for `tolerance_reference = "given"`.
+    pub reference_energy: Option<f64>,
+    /// Geometric rate at which the residue must fall before relaxation grows.
+    #[serde(default = "default_min_decrease")]
+    pub min_decrease: f64,
+    /// Relaxation increment.
+    #[serde(default = "default_relax_increment")]
+    pub relax_increment: f64,
+    /// Relaxation at the start of each step.
+    #[serde(default)]
+    pub initial_relaxation: f64,
+}
+
+fn default_iterations() -> u32 {
+    10
+}
+fn default_min_decrease() -> f64 {
+    0.2
+}
+fn default_relax_increment() -> f64 {
+    0.25
+}
+
+impl Default for MidpointSection {
+    fn default() -> Self {
+        MidpointSection {
+            max_iterations: default_iterations(),
+            tolerance: 0.0,
+            tolerance_reference: ToleranceReference::Absolute,
+            reference_energy: None,
+            min_decrease: default_min_decrease(),
+            relax_increment: default_relax_increment(),
+            initial_relaxation: 0.0,
+        }
+    }
 }
 
 fn default_courant() -> f64 {
@@ -296,6 +377,9 @@ pub struct Case {
     pub resolution: Resolution,
     /// Time stepping.
     pub time: TimeSection,
+    /// Midpoint iterations (with `time.integrator = "midpoint"`).
+    #[serde(default)]
+    pub midpoint: MidpointSection,
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
@@ -532,6 +616,34 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     if let Some(dt) = c.time.min_dt {
         positive("time.min_dt", dt)?;
+    }
+    let mp = &c.midpoint;
+    if mp.max_iterations == 0 || mp.max_iterations > 1000 {
+        return e(
+            "midpoint.max_iterations",
+            format!("expected 1 to 1000, found {}", mp.max_iterations),
+        );
+    }
+    if mp.tolerance.is_nan() || mp.tolerance < 0.0 {
+        return e(
+            "midpoint.tolerance",
+            format!("expected zero or a positive number, found {}", mp.tolerance),
+        );
+    }
+    for (key, v) in [
+        ("midpoint.min_decrease", mp.min_decrease),
+        ("midpoint.relax_increment", mp.relax_increment),
+        ("midpoint.initial_relaxation", mp.initial_relaxation),
+    ] {
+        if !(0.0..1.0).contains(&v) {
+            return e(key, format!("expected a value in [0, 1), found {v}"));
+        }
+    }
+    if mp.tolerance_reference == ToleranceReference::Given && mp.reference_energy.is_none() {
+        return e(
+            "midpoint.reference_energy",
+            "missing: needed by tolerance_reference = \"given\"".into(),
+        );
     }
     if !(c.fluid.delta >= 0.0 && c.fluid.delta <= 1.0) {
         return e(

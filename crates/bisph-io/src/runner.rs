@@ -73,6 +73,14 @@ pub struct Summary {
     pub max_speed_final: f64,
     /// Largest particle speed seen at any series row.
     pub max_speed_max: f64,
+    /// Mean midpoint iterations per step (1 for Verlet).
+    pub iterations_mean: f64,
+    /// Most midpoint iterations in a step.
+    pub iterations_max: u32,
+    /// Largest final residue of a step (paper 1, eq 53).
+    pub residue_max: f64,
+    /// Steps that ended without reaching the residue tolerance.
+    pub unconverged_steps: u64,
     /// Threads used.
     pub threads: usize,
     /// VTK frames written.
@@ -145,6 +153,19 @@ pub fn run<V: CaseDim>(
     probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
     let mut probes_csv = Series::create(out.join("probes.csv"), &probe_header)?;
     let mut frames = Frames::new(out)?;
+    let midpoint = match sim.config.integrator {
+        bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
+        bisph_core::simulation::Integrator::Verlet => None,
+    };
+    let mut iterations_csv = match midpoint {
+        Some(_) => Some(Series::create(
+            out.join("midpoint.csv"),
+            &["t", "iterations", "residue"].map(String::from),
+        )?),
+        None => None,
+    };
+    let (mut iterations_sum, mut iterations_max, mut residue_max, mut unconverged) =
+        (0u64, 0u32, 0.0f64, 0u64);
 
     let scale = energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity);
     let e0 = sim.energy();
@@ -211,6 +232,15 @@ pub fn run<V: CaseDim>(
             stopped = Some(e);
             break;
         }
+        iterations_sum += sim.last_iterations as u64;
+        iterations_max = iterations_max.max(sim.last_iterations);
+        residue_max = residue_max.max(sim.last_residue);
+        if let (Some(csv), Some(p)) = (iterations_csv.as_mut(), midpoint) {
+            csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
+            if sim.last_residue >= p.tolerance {
+                unconverged += 1;
+            }
+        }
     }
     let wall_seconds = started.elapsed().as_secs_f64();
     if stopped.is_some() && case.output.vtk_interval > 0.0 {
@@ -235,6 +265,10 @@ pub fn run<V: CaseDim>(
         energy_drift_max_relative: max_drift,
         max_speed_final: sim.max_speed(),
         max_speed_max: max_speed,
+        iterations_mean: iterations_sum as f64 / sim.step.max(1) as f64,
+        iterations_max,
+        residue_max,
+        unconverged_steps: unconverged,
         threads: rayon::current_num_threads(),
         frames: frames.count(),
         stopped: stopped.as_ref().map(|e| e.to_string()),

@@ -14,14 +14,19 @@ use crate::neighbours::CellGrid;
 use rayon::prelude::*;
 
 /// Reflects the velocities of particles that would cross a wall in the next `dt`.
-/// Returns the kinetic energy the particles lost (energy given to the walls), summed in a
-/// fixed order.
+///
+/// The particles drift with `velocity` or, when `start_velocity` is given, with the mean of
+/// the two (midpoint scheme: `velocity` is then the end-of-step velocity, reflected so its
+/// magnitude relative to the wall is kept). Returns the kinetic energy the particles lost
+/// (energy given to the walls), summed in a fixed order.
+#[allow(clippy::too_many_arguments)]
 pub fn elastic_bounce<V: Vector>(
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
     position: &[V],
     mass: &[f64],
     velocity: &mut [V],
+    start_velocity: Option<&[V]>,
     dt: f64,
     lost_energy: &mut Vec<f64>,
 ) -> f64 {
@@ -38,6 +43,7 @@ pub fn elastic_bounce<V: Vector>(
         .for_each(|(i, (u, lost))| {
             let x = position[i];
             let before = u.length_squared();
+            let start = start_velocity.map(|s| s[i]);
             grid.for_each_candidate(x, |j| {
                 let n = elements.normal[j];
                 let r = elements.centre[j] - x;
@@ -48,9 +54,16 @@ pub fn elastic_bounce<V: Vector>(
                 if (r - n * normal_distance).length() > elements.reach[j] * (1.0 + 1e-6) {
                     return; // beside the element
                 }
-                let approach = (*u - elements.velocity[j]).dot(n);
+                let drift = match start {
+                    Some(s) => (*u + s) * 0.5,
+                    None => *u,
+                };
+                let approach = (drift - elements.velocity[j]).dot(n);
                 if approach > 0.0 && normal_distance <= dt * approach {
-                    *u -= n * (2.0 * approach);
+                    let normal_speed = (*u - elements.velocity[j]).dot(n);
+                    if normal_speed > 0.0 {
+                        *u -= n * (2.0 * normal_speed);
+                    }
                 }
             });
             *lost = 0.5 * mass[i] * (before - u.length_squared());

@@ -102,6 +102,8 @@ pub struct Walls<V: Vector> {
     pub bodies: Vec<Body<V>>,
     /// Cell grid over the element centres.
     pub grid: CellGrid<V>,
+    /// Time at which the element positions were last placed.
+    pub placed_at: f64,
 }
 
 impl<V: Vector> Walls<V> {
@@ -111,6 +113,7 @@ impl<V: Vector> Walls<V> {
             elements,
             bodies,
             grid: CellGrid::new(cell_size),
+            placed_at: 0.0,
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
@@ -126,6 +129,7 @@ impl<V: Vector> Walls<V> {
     /// Places every moving body at time `t`: element centres, normals and velocities
     /// (`U_j = v + omega x (r_j - c)`), then rebuilds the element grid.
     pub fn move_to(&mut self, t: f64) {
+        self.placed_at = t;
         if !self.has_moving_bodies() {
             return;
         }
@@ -148,6 +152,26 @@ impl<V: Vector> Walls<V> {
             }
         }
         self.grid.rebuild(&self.elements.centre);
+    }
+
+    /// Sets the element velocities of moving bodies to their values at time `t`, keeping the
+    /// element positions (the midpoint scheme evaluates at frozen positions).
+    pub fn set_velocities_at(&mut self, t: f64) {
+        for (b, body) in self.bodies.iter().enumerate() {
+            if matches!(body.motion, Motion::Fixed) {
+                continue;
+            }
+            let k = body.motion.kinematics(t);
+            let now = body.motion.kinematics(self.placed_at);
+            let centre = body.centre + now.displacement;
+            let e = &mut self.elements;
+            for j in 0..e.len() {
+                if e.body[j] as usize == b {
+                    e.velocity[j] =
+                        k.velocity + V::angular_cross(k.angular_velocity, e.centre[j] - centre);
+                }
+            }
+        }
     }
 
     /// Pressure force `sum_j P_j n_j s_j` and torque about the body's current centre, per body

@@ -1,13 +1,11 @@
-//! A simulation: fluid, walls and the chosen models, advanced step by step.
-//!
-//! Time integration (explicit, second order, one rate evaluation per step; velocity Verlet
-//! in kick-drift-kick form extended to the density):
-//! 1. `u* = u^n + dt/2 a^n`, `rho* = rho^n + dt/2 rhodot^n`, `r^{n+1} = r^n + dt u*`;
-//! 2. walls to `t^{n+1}`; rates `a^{n+1}, rhodot^{n+1}` at `r^{n+1}` and the predicted
-//!    `u* + dt/2 a^n`, `rho* + dt/2 rhodot^n`;
-//! 3. `u^{n+1} = u* + dt/2 a^{n+1}`, `rho^{n+1} = rho* + dt/2 rhodot^{n+1}`.
-//!
-//! The wall work is integrated with the trapezoidal rule of the same step.
+//! A simulation: fluid, walls and the chosen models, advanced step by step by one of two
+//! integrators: explicit velocity Verlet ([`verlet`]) or the semi-implicit midpoint scheme
+//! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
+
+mod midpoint;
+mod verlet;
+
+pub use midpoint::MidpointParams;
 
 use crate::dim::Vector;
 use crate::energy::{fluid_energies, EnergyBudget};
@@ -18,7 +16,6 @@ use crate::neighbours::CellGrid;
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{compute_rates, DensityDiffusion, RateModel};
-use crate::walls::bounce::elastic_bounce;
 use crate::walls::energy_bi::EnergyConservingWalls;
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
 use crate::walls::WallModel;
@@ -33,6 +30,15 @@ pub enum WallModelChoice {
     Energy,
     /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
     ShepardBi(ShepardKind),
+}
+
+/// Time integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Integrator {
+    /// Explicit velocity Verlet, one rate evaluation per step.
+    Verlet,
+    /// Semi-implicit midpoint with fixed-point iterations (paper 1).
+    Midpoint(MidpointParams),
 }
 
 /// Parameters of a simulation.
@@ -60,6 +66,8 @@ pub struct SimConfig<V: Vector> {
     pub domain_max: V,
     /// Wall model.
     pub wall_model: WallModelChoice,
+    /// Time integrator.
+    pub integrator: Integrator,
     /// Reorder particles by cell every this many steps (0 = never).
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
@@ -72,6 +80,9 @@ struct Scratch<V> {
     velocity: Vec<V>,
     density: Vec<f64>,
     lost_energy: Vec<f64>,
+    previous_acceleration: Vec<V>,
+    previous_density_rate: Vec<f64>,
+    start_velocity: Vec<V>,
     permute: PermuteScratch<V>,
 }
 
@@ -96,6 +107,10 @@ pub struct Simulation<V: Vector> {
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
     pub wall_power: f64,
+    /// Fixed-point iterations of the last midpoint step (1 for Verlet).
+    pub last_iterations: u32,
+    /// Final energy residue (paper 1, eq 53) of the last midpoint step (0 for Verlet).
+    pub last_residue: f64,
     /// Cell grid over the fluid particles.
     pub fluid_grid: CellGrid<V>,
     scratch: Scratch<V>,
@@ -120,6 +135,8 @@ impl<V: Vector> Simulation<V> {
             last_dt: 0.0,
             wall_work: 0.0,
             wall_power: 0.0,
+            last_iterations: 0,
+            last_residue: 0.0,
             fluid_grid: CellGrid::new(cell),
             scratch: Scratch::default(),
         };
@@ -153,7 +170,7 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
-    fn rebuild_grid(&mut self, reorder: bool) {
+    pub(crate) fn rebuild_grid(&mut self, reorder: bool) {
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
             let order = self.fluid_grid.sorted_items().to_vec();
@@ -163,7 +180,7 @@ impl<V: Vector> Simulation<V> {
     }
 
     /// Pressures from the stored densities.
-    fn refresh_pressure(&mut self) {
+    pub(crate) fn refresh_pressure(&mut self) {
         let eos = self.config.eos;
         self.fluid
             .pressure
@@ -174,7 +191,7 @@ impl<V: Vector> Simulation<V> {
 
     /// Rates at the positions in `fluid`, the velocities and densities in the scratch buffers;
     /// also refreshes the wall pressures and the wall power.
-    fn evaluate_rates(&mut self) {
+    pub(crate) fn evaluate_rates(&mut self) {
         let eos = self.config.eos;
         let model = self.rate_model();
         let Fluid {
@@ -253,76 +270,10 @@ impl<V: Vector> Simulation<V> {
                 time: self.time,
             });
         }
-        let half = 0.5 * dt;
-        // 1. kick, bounce off walls, drift.
-        {
-            let f = &mut self.fluid;
-            f.velocity
-                .par_iter_mut()
-                .zip(f.acceleration.par_iter())
-                .for_each(|(u, &a)| *u += a * half);
-            if self.config.elastic_bounce {
-                self.wall_work += elastic_bounce(
-                    &self.walls.elements,
-                    &self.walls.grid,
-                    &f.position,
-                    &f.mass,
-                    &mut f.velocity,
-                    dt,
-                    &mut self.scratch.lost_energy,
-                );
-            }
-            f.position
-                .par_iter_mut()
-                .zip(f.velocity.par_iter())
-                .for_each(|(r, &u)| *r += u * dt);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+        match self.config.integrator {
+            Integrator::Verlet => self.verlet_step(dt)?,
+            Integrator::Midpoint(params) => self.midpoint_step(dt, &params)?,
         }
-        let power_before = self.wall_power;
-        self.time += dt;
-        self.step += 1;
-        self.last_dt = dt;
-        self.check_state()?;
-        // 2. walls, neighbours, rates at the predicted state.
-        self.walls.move_to(self.time);
-        let interval = self.config.reorder_interval;
-        self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
-        {
-            let f = &self.fluid;
-            let s = &mut self.scratch;
-            s.velocity.clear();
-            s.velocity.extend(
-                f.velocity
-                    .iter()
-                    .zip(&f.acceleration)
-                    .map(|(&u, &a)| u + a * half),
-            );
-            s.density.clear();
-            s.density.extend(
-                f.density
-                    .iter()
-                    .zip(&f.density_rate)
-                    .map(|(&rho, &d)| rho + d * half),
-            );
-        }
-        self.evaluate_rates();
-        // 3. kick.
-        {
-            let f = &mut self.fluid;
-            f.velocity
-                .par_iter_mut()
-                .zip(f.acceleration.par_iter())
-                .for_each(|(u, &a)| *u += a * half);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
-        }
-        self.wall_work += half * (power_before + self.wall_power);
-        self.refresh_pressure();
         self.check_state()
     }
 
