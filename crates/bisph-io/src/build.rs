@@ -7,7 +7,7 @@ use bisph_core::geometry::{self, ElementShape};
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
-use bisph_core::walls::{Body, BoundaryElements, Motion, PrescribedMotion, Walls};
+use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
 use glam::{DVec2, DVec3};
 
@@ -116,6 +116,20 @@ pub fn build_simulation<V: CaseDim>(
                 })
             }
         };
+        let motion = match &b.piston {
+            Some(p) => {
+                let axis = V::from_slice(&p.axis);
+                Motion::Piston(Piston {
+                    axis: axis / axis.length(),
+                    mass: p.mass,
+                    outside_force: 0.0, // outside pressure times area, set below
+                    position: 0.0,
+                    velocity: p.initial_velocity,
+                    acceleration: 0.0,
+                })
+            }
+            None => motion,
+        };
         let centre = V::from_slice(b.centre.as_deref().unwrap_or(&[]));
         bodies.push(Body {
             name: b.name.clone(),
@@ -125,6 +139,7 @@ pub fn build_simulation<V: CaseDim>(
     }
 
     let mut elements = BoundaryElements::default();
+    let mut stretch: Vec<Stretch> = Vec::new();
     let element_size = dx * case.resolution.element_over_dx;
     for (k, w) in case.wall.iter().enumerate() {
         let body = match &w.body {
@@ -138,8 +153,53 @@ pub fn build_simulation<V: CaseDim>(
                 "this wall has no element (zero length or every side open)",
             ));
         }
+        let first = elements.len() as u32;
         for s in shapes {
             elements.push(s.centre, s.normal, s.area, body, &s.corners);
+        }
+        if let Some(st) = &w.stretch {
+            let piston = 1 + case
+                .body
+                .iter()
+                .position(|b| b.name == st.body)
+                .unwrap_or(0) as u32;
+            stretch.push(Stretch {
+                body: piston,
+                anchor: st.anchor,
+                face: 0.0,
+                elements: (first..elements.len() as u32).collect(),
+            });
+        }
+    }
+    // Pistons: outside force = outside pressure x piston area; reference face along the axis.
+    for (k, b) in case.body.iter().enumerate() {
+        let (Some(spec), Motion::Piston(p)) = (&b.piston, &mut bodies[k + 1].motion) else {
+            continue;
+        };
+        let ids: Vec<usize> = (0..elements.len())
+            .filter(|&j| elements.body[j] as usize == k + 1)
+            .collect();
+        if ids.is_empty() {
+            return Err(loaded.error(
+                &format!("body[{k}].piston"),
+                "no [[wall]] belongs to this piston",
+            ));
+        }
+        let area: f64 = ids.iter().map(|&j| elements.area[j]).sum();
+        p.outside_force = spec.outside_pressure * area;
+        let face = ids
+            .iter()
+            .map(|&j| elements.centre[j].dot(p.axis))
+            .sum::<f64>()
+            / ids.len() as f64;
+        for group in stretch.iter_mut().filter(|g| g.body as usize == k + 1) {
+            group.face = face;
+            if (face - group.anchor).abs() < 1e-12 {
+                return Err(loaded.error(
+                    &format!("body[{k}].piston"),
+                    "a stretching wall's anchor sits on the piston face",
+                ));
+            }
         }
     }
 
@@ -184,6 +244,10 @@ pub fn build_simulation<V: CaseDim>(
                     &format!("{key}.pressure"),
                     format!("no density gives the pressure {p} Pa with this equation of state"),
                 ));
+            };
+            let mass = match block.mass {
+                crate::case::MassRule::Reference => mass,
+                crate::case::MassRule::Initial => rho * dx.powi(V::DIM as i32),
             };
             fluid.push(r, velocity, rho, mass, p);
         }
@@ -273,7 +337,8 @@ pub fn build_simulation<V: CaseDim>(
         integrator,
         ..config
     };
-    let walls = Walls::new(elements, bodies, kernel.support);
+    let mut walls = Walls::new(elements, bodies, kernel.support);
+    walls.stretch = stretch;
     Ok(Simulation::new(config, fluid, walls, probes))
 }
 

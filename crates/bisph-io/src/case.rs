@@ -282,6 +282,21 @@ pub struct FluidBlock {
     pub pressure: Option<InitialPressure>,
     /// Free-surface level along `-g` for the hydrostatic pressure (default: top of the block).
     pub surface: Option<f64>,
+    /// Particle masses: `"reference"` (`rho0 dx^d`, default) or `"initial"` (`rho dx^d` with
+    /// the initial density, for a fluid that starts compressed).
+    #[serde(default)]
+    pub mass: MassRule,
+}
+
+/// How particle masses are set.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MassRule {
+    /// `rho0 dx^d`.
+    #[default]
+    Reference,
+    /// `rho_i dx^d` with the initial density.
+    Initial,
 }
 
 /// `[[wall]]`.
@@ -301,6 +316,8 @@ pub struct WallSpec {
     pub points: Option<Vec<Vec<f64>>>,
     /// Owning body (default: the fixed walls).
     pub body: Option<String>,
+    /// Stretch with a piston (the wall must lie along the piston axis).
+    pub stretch: Option<StretchSpec>,
 }
 
 /// `[body.motion]`: prescribed motion (see `PrescribedMotion`).
@@ -330,6 +347,22 @@ pub struct MotionSpec {
     pub angular_frequency: f64,
 }
 
+/// `[body.piston]`: a wall sliding along its outward normal, driven by the fluid.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PistonSpec {
+    /// Axis of motion (normalised), pointing out of the fluid.
+    pub axis: Vec<f64>,
+    /// Mass (per unit depth in 2-D).
+    pub mass: f64,
+    /// Outside pressure pushing the piston into the fluid.
+    #[serde(default)]
+    pub outside_pressure: f64,
+    /// Initial velocity along the axis.
+    #[serde(default)]
+    pub initial_velocity: f64,
+}
+
 /// `[[body]]`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -340,6 +373,19 @@ pub struct BodySpec {
     pub centre: Option<Vec<f64>>,
     /// Prescribed motion (none: fixed).
     pub motion: Option<MotionSpec>,
+    /// Piston dynamics (instead of a prescribed motion).
+    pub piston: Option<PistonSpec>,
+}
+
+/// `stretch` of a `[[wall]]`: the wall stretches with a piston between a fixed anchor and the
+/// piston face.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StretchSpec {
+    /// The piston body.
+    pub body: String,
+    /// The fixed end, as a coordinate along the piston axis.
+    pub anchor: f64,
 }
 
 /// `[[probe]]`.
@@ -725,6 +771,22 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
+        }
+        if let Some(p) = &b.piston {
+            if b.motion.is_some() {
+                return e(
+                    &format!("{key}.piston"),
+                    "a body has either a motion or a piston, not both".into(),
+                );
+            }
+            vector(loaded, &format!("{key}.piston.axis"), &p.axis, d)?;
+            if p.axis.iter().all(|x| *x == 0.0) {
+                return e(
+                    &format!("{key}.piston.axis"),
+                    "expected a non-zero vector".into(),
+                );
+            }
+            positive(&format!("{key}.piston.mass"), p.mass)?;
         }
         if let Some(m) = &b.motion {
             for (name, v) in [

@@ -5,6 +5,7 @@ use crate::case::{CaseError, LoadedCase};
 use crate::output::{at, write_atomic, Frames, OutputError, Series};
 use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
 use bisph_core::energy::energy_scale;
+use bisph_core::walls::Motion;
 use bisph_core::{SimError, Simulation};
 use serde::Serialize;
 use std::path::Path;
@@ -153,6 +154,26 @@ pub fn run<V: CaseDim>(
     probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
     let mut probes_csv = Series::create(out.join("probes.csv"), &probe_header)?;
     let mut frames = Frames::new(out)?;
+    let has_pistons = sim
+        .walls
+        .bodies
+        .iter()
+        .any(|b| matches!(b.motion, Motion::Piston(_)));
+    let mut bodies_csv = match has_pistons {
+        true => Some(Series::create(
+            out.join("bodies.csv"),
+            &[
+                "t",
+                "body",
+                "position",
+                "velocity",
+                "kinetic",
+                "outside_work",
+            ]
+            .map(String::from),
+        )?),
+        false => None,
+    };
     let midpoint = match sim.config.integrator {
         bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
         bisph_core::simulation::Integrator::Verlet => None,
@@ -200,6 +221,19 @@ pub fn run<V: CaseDim>(
                     values.extend(V::angular_to_vec(moment));
                 }
                 forces_csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
+            }
+            if let Some(csv) = bodies_csv.as_mut() {
+                for b in &sim.walls.bodies {
+                    if let Motion::Piston(p) = b.motion {
+                        let values = [
+                            p.position,
+                            p.velocity,
+                            p.kinetic_energy(),
+                            p.outside_force * p.position,
+                        ];
+                        csv.named_row(t, &b.name, &values)?;
+                    }
+                }
             }
             let mut row = vec![t];
             row.extend(sim.sample_probes());

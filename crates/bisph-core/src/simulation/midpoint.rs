@@ -13,7 +13,8 @@
 //!    zero on the last pass; stop when `R < tolerance` or after `max_iterations`.
 //!
 //! Then `u^{n+1} = u^n + dt a`, `r^{n+1} = r^n + dt (u^n + u^{n+1}) / 2`,
-//! `rho^{n+1} = rho^n + dt rhodot`, and the wall work grows by `dt sum_j F_j . U_j` at the
+//! `rho^{n+1} = rho^n + dt rhodot`; pistons iterate with the fluid (their midpoint velocity
+//! drives their elements, their acceleration joins the residue and the relaxation); the wall work grows by `dt sum_j F_j . U_j` at the
 //! midpoint: at convergence the fluid's energy change and the wall work balance exactly, up to
 //! the midpoint rule of the compression energy.
 
@@ -61,6 +62,8 @@ impl<V: Vector> Simulation<V> {
         let half = 0.5 * dt;
         let t_mid = self.time + half;
         self.walls.set_velocities_at(t_mid);
+        let piston_start: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
+        let mut piston_previous: Vec<f64> = Vec::new();
         let mut relaxation = params.initial_relaxation;
         let mut previous_residue = f64::INFINITY;
         let mut iterations = 0;
@@ -87,8 +90,18 @@ impl<V: Vector> Simulation<V> {
                         .map(|(&r, &d)| r + d * half),
                 );
             }
+            piston_previous.clear();
+            for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
+                p.velocity = v0 + half * p.acceleration;
+                piston_previous.push(p.acceleration);
+            }
+            self.walls.set_velocities_at(t_mid);
             self.evaluate_rates();
+            self.store_piston_accelerations();
             residue = self.residue();
+            for (p, &old) in self.walls.pistons_mut().zip(&piston_previous) {
+                residue += (p.mass * p.velocity * (p.acceleration - old)).abs();
+            }
             let converged = residue < params.tolerance;
             if m > 0 && residue > params.min_decrease * previous_residue {
                 relaxation = params.relax_increment + (1.0 - params.relax_increment) * relaxation;
@@ -112,6 +125,9 @@ impl<V: Vector> Simulation<V> {
                     .par_iter_mut()
                     .zip(s.previous_density_rate.par_iter())
                     .for_each(|(d, &old)| *d = keep * old + (1.0 - keep) * *d);
+                for (p, &old) in self.walls.pistons_mut().zip(&piston_previous) {
+                    p.acceleration = keep * old + (1.0 - keep) * p.acceleration;
+                }
             }
             if converged {
                 break;
@@ -120,6 +136,10 @@ impl<V: Vector> Simulation<V> {
         self.last_iterations = iterations;
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;
+        for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
+            p.position += dt * (v0 + half * p.acceleration);
+            p.velocity = v0 + dt * p.acceleration;
+        }
 
         // Corrector.
         let f = &mut self.fluid;

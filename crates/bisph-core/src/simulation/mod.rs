@@ -147,8 +147,19 @@ impl<V: Vector> Simulation<V> {
         sim.scratch.velocity = sim.fluid.velocity.clone();
         sim.scratch.density = sim.fluid.density.clone();
         sim.evaluate_rates();
+        sim.store_piston_accelerations();
         sim.refresh_pressure();
         sim
+    }
+
+    /// Pistons' accelerations from the wall pressures of the last rate evaluation.
+    pub(crate) fn store_piston_accelerations(&mut self) {
+        let acc = self.walls.piston_accelerations();
+        for (body, a) in self.walls.bodies.iter_mut().zip(acc) {
+            if let crate::walls::Motion::Piston(p) = &mut body.motion {
+                p.acceleration = a;
+            }
+        }
     }
 
     /// The rate model handed to the sweep.

@@ -45,6 +45,10 @@ impl<V: Vector> Simulation<V> {
                 .zip(f.density_rate.par_iter())
                 .for_each(|(rho, &drho)| *rho += drho * half);
         }
+        for p in self.walls.pistons_mut() {
+            p.velocity += half * p.acceleration;
+            p.position += dt * p.velocity;
+        }
         let power_before = self.wall_power;
         self.time += dt;
         self.step += 1;
@@ -72,7 +76,17 @@ impl<V: Vector> Simulation<V> {
                     .map(|(&rho, &d)| rho + d * half),
             );
         }
+        let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
+        for p in self.walls.pistons_mut() {
+            p.velocity += half * p.acceleration;
+        }
+        self.walls.set_velocities_at(self.time);
         self.evaluate_rates();
+        self.store_piston_accelerations();
+        for (p, v) in self.walls.pistons_mut().zip(piston_velocities) {
+            p.velocity = v + half * p.acceleration;
+        }
+        self.walls.set_velocities_at(self.time);
         // 3. kick.
         {
             let f = &mut self.fluid;

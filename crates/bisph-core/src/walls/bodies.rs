@@ -1,4 +1,5 @@
-//! Bodies that own boundary elements: fixed, or moving with a prescribed motion.
+//! Bodies that own boundary elements: fixed, moving with a prescribed motion, or a piston
+//! driven by the fluid (paper 1, section 5.2).
 
 use crate::dim::Vector;
 use std::f64::consts::TAU;
@@ -39,6 +40,32 @@ pub struct PrescribedMotion<V: Vector> {
     pub angular_frequency: f64,
 }
 
+/// A piston: a rigid wall sliding along `axis` (its outward normal), driven by the fluid's
+/// pressure force and a constant outside force pushing it back:
+/// `m d2x/dt2 = F_fluid . axis - F_out` (paper 1, section 5.2 and App. C).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piston<V: Vector> {
+    /// Unit axis of motion, pointing out of the fluid.
+    pub axis: V,
+    /// Mass `m`.
+    pub mass: f64,
+    /// Outside force `F_out` (outside pressure times the piston area), along `-axis`.
+    pub outside_force: f64,
+    /// Displacement `x` along the axis from the reference configuration.
+    pub position: f64,
+    /// Velocity along the axis (the midpoint velocity while a midpoint step iterates).
+    pub velocity: f64,
+    /// Acceleration along the axis from the last force evaluation.
+    pub acceleration: f64,
+}
+
+impl<V: Vector> Piston<V> {
+    /// Kinetic energy `m v^2 / 2`.
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.mass * self.velocity * self.velocity
+    }
+}
+
 /// How a body moves.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Motion<V: Vector> {
@@ -46,13 +73,20 @@ pub enum Motion<V: Vector> {
     Fixed,
     /// Moves as a given function of time.
     Prescribed(PrescribedMotion<V>),
+    /// Moves with its own dynamics along one axis.
+    Piston(Piston<V>),
 }
 
 impl<V: Vector> Motion<V> {
-    /// Kinematics at time `t`.
+    /// Kinematics at time `t` (a piston's come from its own state).
     pub fn kinematics(&self, t: f64) -> Kinematics<V> {
         match self {
             Motion::Fixed => Kinematics::default(),
+            Motion::Piston(p) => Kinematics {
+                displacement: p.axis * p.position,
+                velocity: p.axis * p.velocity,
+                ..Kinematics::default()
+            },
             Motion::Prescribed(m) => {
                 let w = TAU * m.frequency;
                 let arg = w * t + m.phase;

@@ -13,7 +13,7 @@ use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
-pub use bodies::{Body, Kinematics, Motion, PrescribedMotion};
+pub use bodies::{Body, Kinematics, Motion, Piston, PrescribedMotion};
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
 /// fluid, area (length in 2-D), velocity and owning body.
@@ -25,6 +25,8 @@ pub struct BoundaryElements<V: Vector> {
     pub normal: Vec<V>,
     /// Areas `s_j` (lengths in 2-D).
     pub area: Vec<f64>,
+    /// Areas in the reference configuration (stretching elements change theirs).
+    pub reference_area: Vec<f64>,
     /// Velocities `U_j`.
     pub velocity: Vec<V>,
     /// Index of the owning body in [`Walls::bodies`].
@@ -66,6 +68,7 @@ impl<V: Vector> BoundaryElements<V> {
         self.centre.push(centre);
         self.normal.push(normal);
         self.area.push(area);
+        self.reference_area.push(area);
         self.velocity.push(V::ZERO);
         self.body.push(body);
         self.pressure.push(0.0);
@@ -104,6 +107,24 @@ pub struct Walls<V: Vector> {
     pub grid: CellGrid<V>,
     /// Time at which the element positions were last placed.
     pub placed_at: f64,
+    /// Elements that stretch with a piston so their number stays constant.
+    pub stretch: Vec<Stretch>,
+}
+
+/// Wall elements aligned with a piston's axis that stretch affinely between a fixed anchor
+/// and the piston face (paper 1, section 5.2): a point at `a` along the axis moves to
+/// `anchor + (a - anchor) lambda`, `lambda = (face - anchor) / (face0 - anchor)`, and areas
+/// scale by `lambda`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stretch {
+    /// The piston body.
+    pub body: u32,
+    /// Fixed end, as a coordinate along the piston axis.
+    pub anchor: f64,
+    /// The piston face in the reference configuration, along the axis.
+    pub face: f64,
+    /// The stretching elements.
+    pub elements: Vec<u32>,
 }
 
 impl<V: Vector> Walls<V> {
@@ -114,6 +135,7 @@ impl<V: Vector> Walls<V> {
             bodies,
             grid: CellGrid::new(cell_size),
             placed_at: 0.0,
+            stretch: Vec::new(),
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
@@ -151,6 +173,7 @@ impl<V: Vector> Walls<V> {
                 e.corners[m] = c + (e.reference_corners[m] - body_centre).rotated_by(k.rotation);
             }
         }
+        self.place_stretching(true);
         self.grid.rebuild(&self.elements.centre);
     }
 
@@ -172,6 +195,55 @@ impl<V: Vector> Walls<V> {
                 }
             }
         }
+        self.place_stretching(false);
+    }
+
+    /// Stretching elements: positions (when `positions`) and velocities from their piston.
+    fn place_stretching(&mut self, positions: bool) {
+        for group in &self.stretch {
+            let Motion::Piston(p) = self.bodies[group.body as usize].motion else {
+                continue;
+            };
+            let length0 = group.face - group.anchor;
+            let lambda = (length0 + p.position) / length0;
+            let rate = p.velocity / length0;
+            let e = &mut self.elements;
+            for &j in &group.elements {
+                let j = j as usize;
+                let along = e.reference_centre[j].dot(p.axis) - group.anchor;
+                e.velocity[j] = p.axis * (along * rate);
+                if positions {
+                    e.centre[j] = e.reference_centre[j] + p.axis * (along * (lambda - 1.0));
+                    e.area[j] = e.reference_area[j] * lambda;
+                    for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
+                        let a = e.reference_corners[m].dot(p.axis) - group.anchor;
+                        e.corners[m] = e.reference_corners[m] + p.axis * (a * (lambda - 1.0));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Acceleration of every piston along its axis from the current wall pressures,
+    /// `(F_fluid . axis - F_out) / m` (zero for other bodies), in body order.
+    pub fn piston_accelerations(&self) -> Vec<f64> {
+        let loads = self.body_loads(self.placed_at);
+        self.bodies
+            .iter()
+            .zip(loads)
+            .map(|(b, (force, _))| match b.motion {
+                Motion::Piston(p) => (force.dot(p.axis) - p.outside_force) / p.mass,
+                _ => 0.0,
+            })
+            .collect()
+    }
+
+    /// Mutable access to the pistons, in body order.
+    pub fn pistons_mut(&mut self) -> impl Iterator<Item = &mut Piston<V>> {
+        self.bodies.iter_mut().filter_map(|b| match &mut b.motion {
+            Motion::Piston(p) => Some(p),
+            _ => None,
+        })
     }
 
     /// Pressure force `sum_j P_j n_j s_j` and torque about the body's current centre, per body
