@@ -7,6 +7,7 @@
 pub mod build;
 pub mod case;
 pub mod output;
+pub mod paper1_cases;
 pub mod plot;
 pub mod runner;
 pub mod validate;
