@@ -235,7 +235,11 @@ pub fn build_simulation<V: CaseDim>(
             let p = match &block.pressure {
                 Some(InitialPressure::Value(p)) => *p,
                 _ if hydrostatic => {
-                    eos_background(&eos) + eos.rho0() * g * (surface - height(r)).max(0.0)
+                    let taper = block.pressure_taper.as_ref().map_or(1.0, |tp| {
+                        let s = ((r.get(tp.axis) - tp.start) / tp.length).clamp(0.0, 1.0);
+                        (0.5 * std::f64::consts::PI * s).cos()
+                    });
+                    eos_background(&eos) + taper * eos.rho0() * g * (surface - height(r)).max(0.0)
                 }
                 _ => eos_background(&eos),
             };

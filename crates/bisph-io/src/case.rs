@@ -282,10 +282,26 @@ pub struct FluidBlock {
     pub pressure: Option<InitialPressure>,
     /// Free-surface level along `-g` for the hydrostatic pressure (default: top of the block).
     pub surface: Option<f64>,
+    /// Multiplies the hydrostatic part of the initial pressure by
+    /// `cos(pi/2 (r_axis - start) / length)` (the Lobovsky initial condition: hydrostatic at
+    /// the back wall, zero at the dam face).
+    pub pressure_taper: Option<TaperSpec>,
     /// Particle masses: `"reference"` (`rho0 dx^d`, default) or `"initial"` (`rho dx^d` with
     /// the initial density, for a fluid that starts compressed).
     #[serde(default)]
     pub mass: MassRule,
+}
+
+/// `pressure_taper` of a fluid block.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TaperSpec {
+    /// Axis index (0 = x, 1 = y, 2 = z).
+    pub axis: usize,
+    /// Where the taper factor is 1.
+    pub start: f64,
+    /// Distance over which it falls to 0.
+    pub length: f64,
 }
 
 /// How particle masses are set.
@@ -720,6 +736,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         shape_points(loaded, &key, &b.shape, &b.min, &b.max, &b.points, d)?;
         if let Some(v) = &b.velocity {
             vector(loaded, &format!("{key}.velocity"), v, d)?;
+        }
+        if let Some(tp) = &b.pressure_taper {
+            if tp.axis >= d {
+                return e(
+                    &format!("{key}.pressure_taper.axis"),
+                    format!("expected 0 to {}, found {}", d - 1, tp.axis),
+                );
+            }
+            positive(&format!("{key}.pressure_taper.length"), tp.length)?;
         }
         if let Some(InitialPressure::Named(name)) = &b.pressure {
             if name != "hydrostatic" {

@@ -141,10 +141,16 @@ impl<V: Vector> Simulation<V> {
             p.velocity = v0 + dt * p.acceleration;
         }
 
-        // Corrector.
+        // Corrector: u^{n+1} = u^n + dt a, drift (u^n + u^{n+1}) / 2.
         let f = &mut self.fluid;
-        let start = &mut self.scratch.start_velocity;
-        start.clone_from(&f.velocity);
+        let drift = &mut self.scratch.drift_velocity;
+        drift.clear();
+        drift.extend(
+            f.velocity
+                .iter()
+                .zip(&f.acceleration)
+                .map(|(&u, &a)| u + a * half),
+        );
         f.velocity
             .par_iter_mut()
             .zip(f.acceleration.par_iter())
@@ -155,16 +161,16 @@ impl<V: Vector> Simulation<V> {
                 &self.walls.grid,
                 &f.position,
                 &f.mass,
-                &mut f.velocity,
-                Some(start),
+                drift,
+                Some(&mut f.velocity),
                 dt,
                 &mut self.scratch.lost_energy,
             );
         }
         f.position
             .par_iter_mut()
-            .zip(f.velocity.par_iter().zip(start.par_iter()))
-            .for_each(|(r, (&u, &u0))| *r += (u + u0) * half);
+            .zip(drift.par_iter())
+            .for_each(|(r, &u)| *r += u * dt);
         f.density
             .par_iter_mut()
             .zip(f.density_rate.par_iter())

@@ -82,7 +82,7 @@ struct Scratch<V> {
     lost_energy: Vec<f64>,
     previous_acceleration: Vec<V>,
     previous_density_rate: Vec<f64>,
-    start_velocity: Vec<V>,
+    drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
 }
 

@@ -13,20 +13,23 @@ use crate::dim::Vector;
 use crate::neighbours::CellGrid;
 use rayon::prelude::*;
 
-/// Reflects the velocities of particles that would cross a wall in the next `dt`.
+/// Reflects the motion of particles that would cross a wall in the next `dt`.
 ///
-/// The particles drift with `velocity` or, when `start_velocity` is given, with the mean of
-/// the two (midpoint scheme: `velocity` is then the end-of-step velocity, reflected so its
-/// magnitude relative to the wall is kept). Returns the kinetic energy the particles lost
-/// (energy given to the walls), summed in a fixed order.
+/// `drift` is the velocity the particles move with during the step; when it would carry a
+/// particle through an element's plane within the element's reach, its normal component
+/// relative to the element is reflected. `end`, when given (midpoint scheme), is the
+/// end-of-step velocity: its relative normal component is reflected too when it points into
+/// the wall, which keeps its magnitude. Without `end`, `drift` is also the particle velocity.
+/// Returns the kinetic energy the particles lost (energy given to moving walls), summed in a
+/// fixed order.
 #[allow(clippy::too_many_arguments)]
 pub fn elastic_bounce<V: Vector>(
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
     position: &[V],
     mass: &[f64],
-    velocity: &mut [V],
-    start_velocity: Option<&[V]>,
+    drift: &mut [V],
+    end: Option<&mut [V]>,
     dt: f64,
     lost_energy: &mut Vec<f64>,
 ) -> f64 {
@@ -35,38 +38,55 @@ pub fn elastic_bounce<V: Vector>(
     }
     lost_energy.clear();
     lost_energy.resize(position.len(), 0.0);
-    velocity
-        .par_iter_mut()
-        .zip(lost_energy.par_iter_mut())
-        .enumerate()
-        .with_min_len(256)
-        .for_each(|(i, (u, lost))| {
-            let x = position[i];
-            let before = u.length_squared();
-            let start = start_velocity.map(|s| s[i]);
-            grid.for_each_candidate(x, |j| {
-                let n = elements.normal[j];
-                let r = elements.centre[j] - x;
-                let normal_distance = r.dot(n);
-                if normal_distance < 0.0 {
-                    return; // behind this element's plane
+    let reflect = |u: &mut V, j: usize| {
+        let n = elements.normal[j];
+        let normal_speed = (*u - elements.velocity[j]).dot(n);
+        if normal_speed > 0.0 {
+            *u -= n * (2.0 * normal_speed);
+        }
+    };
+    let visit = |i: usize, d: &mut V, mut e: Option<&mut V>, lost: &mut f64| {
+        let x = position[i];
+        let before = e
+            .as_deref()
+            .map_or(d.length_squared(), |e| e.length_squared());
+        grid.for_each_candidate(x, |j| {
+            let n = elements.normal[j];
+            let r = elements.centre[j] - x;
+            let normal_distance = r.dot(n);
+            if normal_distance < 0.0 {
+                return; // behind this element's plane
+            }
+            if (r - n * normal_distance).length() > elements.reach[j] * (1.0 + 1e-6) {
+                return; // beside the element
+            }
+            let approach = (*d - elements.velocity[j]).dot(n);
+            if approach > 0.0 && normal_distance <= dt * approach {
+                reflect(d, j);
+                if let Some(e) = e.as_deref_mut() {
+                    reflect(e, j);
                 }
-                if (r - n * normal_distance).length() > elements.reach[j] * (1.0 + 1e-6) {
-                    return; // beside the element
-                }
-                let drift = match start {
-                    Some(s) => (*u + s) * 0.5,
-                    None => *u,
-                };
-                let approach = (drift - elements.velocity[j]).dot(n);
-                if approach > 0.0 && normal_distance <= dt * approach {
-                    let normal_speed = (*u - elements.velocity[j]).dot(n);
-                    if normal_speed > 0.0 {
-                        *u -= n * (2.0 * normal_speed);
-                    }
-                }
-            });
-            *lost = 0.5 * mass[i] * (before - u.length_squared());
+            }
         });
+        let after = e
+            .as_deref()
+            .map_or(d.length_squared(), |e| e.length_squared());
+        *lost = 0.5 * mass[i] * (before - after);
+    };
+    match end {
+        Some(end) => drift
+            .par_iter_mut()
+            .zip(end.par_iter_mut())
+            .zip(lost_energy.par_iter_mut())
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, ((d, e), lost))| visit(i, d, Some(e), lost)),
+        None => drift
+            .par_iter_mut()
+            .zip(lost_energy.par_iter_mut())
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (d, lost))| visit(i, d, None, lost)),
+    }
     crate::energy::deterministic_sum(lost_energy.len(), |i| lost_energy[i])
 }
