@@ -90,4 +90,6 @@ pub struct FluidState<'a, V> {
     pub mass: &'a [f64],
     /// Pressures (from the densities by the equation of state).
     pub pressure: &'a [f64],
+    /// Volumes `m / rho` (precomputed once per evaluation: no division per pair).
+    pub volume: &'a [f64],
 }

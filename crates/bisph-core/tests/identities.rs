@@ -92,7 +92,14 @@ fn powers<V: Vector>(
             hydrostatic_gradient: V::ZERO,
         },
     };
+    let volume: Vec<f64> = state
+        .mass
+        .iter()
+        .zip(&state.density)
+        .map(|(m, rho)| m / rho)
+        .collect();
     let view = FluidState {
+        volume: &volume,
         position: &state.position,
         velocity: &state.velocity,
         density: &state.density,

@@ -79,6 +79,7 @@ pub struct SimConfig<V: Vector> {
 struct Scratch<V> {
     velocity: Vec<V>,
     density: Vec<f64>,
+    volume: Vec<f64>,
     lost_energy: Vec<f64>,
     previous_acceleration: Vec<V>,
     previous_density_rate: Vec<f64>,
@@ -217,12 +218,19 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(self.scratch.density.par_iter())
             .for_each(|(p, &rho)| *p = eos.pressure(rho));
+        let volume = &mut self.scratch.volume;
+        volume.resize(mass.len(), 0.0);
+        volume
+            .par_iter_mut()
+            .zip(mass.par_iter().zip(self.scratch.density.par_iter()))
+            .for_each(|(v, (&m, &rho))| *v = m / rho);
         let state = FluidState {
             position,
             velocity: &self.scratch.velocity,
             density: &self.scratch.density,
             mass,
             pressure,
+            volume,
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         match self.config.wall_model {

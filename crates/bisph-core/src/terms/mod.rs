@@ -70,7 +70,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
         let f = kernel.gradient_factor(r);
         let grad_w = r_ij * f;
-        let volume_j = fluid.mass[j] / fluid.density[j];
+        let volume_j = fluid.volume[j];
         grad_p += pressure_gradient::pair(p_i, fluid.pressure[j], grad_w, volume_j);
         div_u += velocity_divergence::pair(u_i, fluid.velocity[j], grad_w, volume_j);
         if diffuse {

@@ -73,7 +73,7 @@ pub fn wall_pressure<V: Vector>(
         .for_each(|(j, pj)| {
             let mut sum = 0.0;
             fluid_grid.for_each_neighbour(centres[j], fluid.position, kernel.support, |i, _, r| {
-                sum += fluid.pressure[i] * fluid.mass[i] / fluid.density[i] * kernel.value(r);
+                sum += fluid.pressure[i] * fluid.volume[i] * kernel.value(r);
             });
             *pj = 2.0 * sum;
         });

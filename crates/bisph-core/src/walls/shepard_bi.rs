@@ -58,7 +58,7 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
                     fluid.position,
                     kernel.support,
                     |j, r_kj, r| {
-                        let wv = kernel.value(r) * fluid.mass[j] / fluid.density[j];
+                        let wv = kernel.value(r) * fluid.volume[j];
                         // r_kj = r_j - r_k, so g . (r_k - r_j) = -g . r_kj.
                         weighted += (fluid.pressure[j] - fluid.density[j] * g.dot(r_kj)) * wv;
                         shepard += wv;
