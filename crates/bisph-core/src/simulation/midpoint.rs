@@ -71,25 +71,11 @@ impl<V: Vector> Simulation<V> {
         for m in 0..params.max_iterations.max(1) {
             iterations = m + 1;
             {
-                let f = &self.fluid;
-                let s = &mut self.scratch;
+                let (f, s) = (&self.fluid, &mut self.scratch);
                 s.previous_acceleration.clone_from(&f.acceleration);
                 s.previous_density_rate.clone_from(&f.density_rate);
-                s.velocity.clear();
-                s.velocity.extend(
-                    f.velocity
-                        .iter()
-                        .zip(&f.acceleration)
-                        .map(|(&u, &a)| u + a * half),
-                );
-                s.density.clear();
-                s.density.extend(
-                    f.density
-                        .iter()
-                        .zip(&f.density_rate)
-                        .map(|(&r, &d)| r + d * half),
-                );
             }
+            self.stage_state(half);
             piston_previous.clear();
             for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
                 p.velocity = v0 + half * p.acceleration;

@@ -153,6 +153,26 @@ impl<V: Vector> Simulation<V> {
         sim
     }
 
+    /// Fills the evaluation state (scratch velocities and densities) with
+    /// `u + tau a`, `rho + tau rhodot` from the stored state and rates.
+    pub(crate) fn stage_state(&mut self, tau: f64) {
+        let (f, s) = (&self.fluid, &mut self.scratch);
+        s.velocity.clear();
+        s.velocity.extend(
+            f.velocity
+                .iter()
+                .zip(&f.acceleration)
+                .map(|(&u, &a)| u + a * tau),
+        );
+        s.density.clear();
+        s.density.extend(
+            f.density
+                .iter()
+                .zip(&f.density_rate)
+                .map(|(&rho, &d)| rho + d * tau),
+        );
+    }
+
     /// Pistons' accelerations from the wall pressures of the last rate evaluation.
     pub(crate) fn store_piston_accelerations(&mut self) {
         let acc = self.walls.piston_accelerations();

@@ -58,24 +58,7 @@ impl<V: Vector> Simulation<V> {
         self.walls.move_to(self.time);
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
-        {
-            let f = &self.fluid;
-            let s = &mut self.scratch;
-            s.velocity.clear();
-            s.velocity.extend(
-                f.velocity
-                    .iter()
-                    .zip(&f.acceleration)
-                    .map(|(&u, &a)| u + a * half),
-            );
-            s.density.clear();
-            s.density.extend(
-                f.density
-                    .iter()
-                    .zip(&f.density_rate)
-                    .map(|(&rho, &d)| rho + d * half),
-            );
-        }
+        self.stage_state(half);
         let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
         for p in self.walls.pistons_mut() {
             p.velocity += half * p.acceleration;
