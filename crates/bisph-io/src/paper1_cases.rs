@@ -260,7 +260,8 @@ impl ValidationCase for AdiabaticPiston {
         // Case constants (see cases/adiabatic-piston.toml).
         let (x0, a, m, big_m, c0) = (1.0, 0.0099, 4.84, 1.0, 1.0);
         let w2 = (c0 / x0) * (c0 / x0) * big_m / m;
-        let (ode_period, ode_t, ode_x) = piston_ode_period(w2, x0, a, t.last().copied().unwrap_or(0.0));
+        let (ode_period, ode_t, ode_x) =
+            piston_ode_period(w2, x0, a, t.last().copied().unwrap_or(0.0));
         let acoustic_period = piston_acoustic_period(big_m / m, x0, c0);
         let period = measured_period(&t, &position);
         let omega = w2.sqrt();

@@ -4,7 +4,9 @@
 //! fixed number of steps (after warm-up, no output) at `h/dx = 2` and at support
 //! `2h = 2.83 dx` (the neighbour count DualSPHysics uses), with 1 and 2 threads.
 //! Reported: particle-steps per second, pair interactions per second (fluid pairs within the
-//! support, each counted from both sides, self included), ns per interaction.
+//! support, each counted from both sides, self included), ns per interaction, the share of
+//! each phase (neighbour search, reordering, rate evaluation with its wall terms, the rest of
+//! the integration) and the resident memory per particle.
 
 use bisph_core::Simulation;
 use bisph_io::build::build_simulation;
@@ -35,8 +37,19 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     let dx = (0.18 / args.particles.max(100) as f64).sqrt();
     let mut results = Vec::new();
     println!(
-        "{:>8} {:>7} {:>10} {:>8} {:>14} {:>14} {:>8}",
-        "h/dx", "threads", "particles", "neigh.", "part-steps/s", "pairs/s", "ns/pair"
+        "{:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "h/dx",
+        "threads",
+        "particles",
+        "neigh",
+        "part-steps/s",
+        "pairs/s",
+        "ns/pair",
+        "nbr%",
+        "reord%",
+        "rates%",
+        "integ%",
+        "B/part"
     );
     for h_over_dx in [2.0, 2.83 / 2.0] {
         let overrides = vec![
@@ -88,6 +101,9 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                 "neighbours_per_particle": neighbours, "particle_steps_per_second": psps,
                 "pair_interactions_per_second": pairs, "ns_per_interaction": 1e9 / pairs,
                 "steps": args.steps,
+                "seconds_neighbour_search": t.neighbours - t.reorder, "seconds_reorder": t.reorder,
+                "seconds_rates": t.rates, "seconds_integration": integration, "seconds_steps": t.steps,
+                "resident_bytes_per_particle": bytes,
             }));
         }
     }
@@ -97,4 +113,12 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
             .map_err(|e| (1, format!("cannot write {}: {e}", path.display())))?;
     }
     Ok(())
+}
+
+/// Resident memory of this process (Linux `/proc/self/status`), in bytes.
+fn resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }

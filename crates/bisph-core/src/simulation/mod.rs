@@ -21,6 +21,7 @@ use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
 use crate::walls::WallModel;
 use crate::walls::Walls;
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// Which wall model a case uses (chosen once; the sweep is monomorphised for it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -30,6 +31,19 @@ pub enum WallModelChoice {
     Energy,
     /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
     ShepardBi(ShepardKind),
+}
+
+/// Wall-clock seconds spent in each phase of the time loop (summed over steps).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Neighbour search: cell grid rebuilds, reordering included.
+    pub neighbours: f64,
+    /// Of which reordering the particles by cell.
+    pub reorder: f64,
+    /// Rate evaluations: equation of state, fluid and wall terms, wall pressures.
+    pub rates: f64,
+    /// Whole steps (so integration = steps - neighbours - rates).
+    pub steps: f64,
 }
 
 /// Time integrator.
@@ -114,6 +128,8 @@ pub struct Simulation<V: Vector> {
     pub last_residue: f64,
     /// Cell grid over the fluid particles.
     pub fluid_grid: CellGrid<V>,
+    /// Wall-clock seconds spent per phase since the start.
+    pub timings: PhaseTimes,
     scratch: Scratch<V>,
 }
 
@@ -139,6 +155,7 @@ impl<V: Vector> Simulation<V> {
             last_iterations: 0,
             last_residue: 0.0,
             fluid_grid: CellGrid::new(cell),
+            timings: PhaseTimes::default(),
             scratch: Scratch::default(),
         };
         sim.walls.grid = CellGrid::new(cell);
@@ -203,12 +220,16 @@ impl<V: Vector> Simulation<V> {
     }
 
     pub(crate) fn rebuild_grid(&mut self, reorder: bool) {
+        let start = Instant::now();
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
-            let order = self.fluid_grid.sorted_items().to_vec();
-            self.fluid.permute(&order, &mut self.scratch.permute);
+            let sorted = Instant::now();
+            self.fluid
+                .permute(self.fluid_grid.sorted_items(), &mut self.scratch.permute);
+            self.timings.reorder += sorted.elapsed().as_secs_f64();
             self.fluid_grid.rebuild(&self.fluid.position);
         }
+        self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
     /// Pressures from the stored densities.
@@ -224,6 +245,7 @@ impl<V: Vector> Simulation<V> {
     /// Rates at the positions in `fluid`, the velocities and densities in the scratch buffers;
     /// also refreshes the wall pressures and the wall power.
     pub(crate) fn evaluate_rates(&mut self) {
+        let start = Instant::now();
         let eos = self.config.eos;
         let model = self.rate_model();
         let Fluid {
@@ -272,6 +294,7 @@ impl<V: Vector> Simulation<V> {
             }
         }
         self.wall_power = self.walls.power();
+        self.timings.rates += start.elapsed().as_secs_f64();
     }
 
     /// Time step for the next step: fixed, or `Co min(h / c0, sqrt(h / max|a|))`.
@@ -309,10 +332,12 @@ impl<V: Vector> Simulation<V> {
                 time: self.time,
             });
         }
+        let start = Instant::now();
         match self.config.integrator {
             Integrator::Verlet => self.verlet_step(dt)?,
             Integrator::Midpoint(params) => self.midpoint_step(dt, &params)?,
         }
+        self.timings.steps += start.elapsed().as_secs_f64();
         self.check_state()
     }
 
