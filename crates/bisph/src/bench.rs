@@ -32,6 +32,16 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
 }
 
+/// One measured configuration.
+struct Row {
+    particles: f64,
+    neighbours: f64,
+    particle_steps: f64,
+    pairs: f64,
+    timings: bisph_core::simulation::PhaseTimes,
+    bytes: f64,
+}
+
 pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     // Water column 0.6 x 0.3 m of the default case.
     let dx = (0.18 / args.particles.max(100) as f64).sqrt();
@@ -71,6 +81,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                     sim.advance(None).map_err(|e| (3, e.to_string()))?;
                 }
                 let pairs_per_step = sim.count_pairs() as f64;
+                sim.timings = Default::default();
                 let start = Instant::now();
                 for _ in 0..args.steps {
                     sim.advance(None).map_err(|e| (3, e.to_string()))?;
@@ -78,23 +89,40 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                 let seconds = start.elapsed().as_secs_f64();
                 let n = sim.fluid.len() as f64;
                 let steps = args.steps as f64;
-                Ok((
-                    n,
-                    pairs_per_step / n,
-                    n * steps / seconds,
-                    pairs_per_step * steps / seconds,
-                ))
+                let bytes = resident_bytes().unwrap_or(0) as f64 / n;
+                Ok(Row {
+                    particles: n,
+                    neighbours: pairs_per_step / n,
+                    particle_steps: n * steps / seconds,
+                    pairs: pairs_per_step * steps / seconds,
+                    timings: sim.timings,
+                    bytes,
+                })
             })?;
-            let (n, neighbours, psps, pairs) = row;
+            let Row {
+                particles: n,
+                neighbours,
+                particle_steps: psps,
+                pairs,
+                timings: t,
+                bytes,
+            } = row;
+            let share = |x: f64| 100.0 * x / t.steps.max(1e-12);
+            let integration = t.steps - t.neighbours - t.rates;
             println!(
-                "{:>8.3} {:>7} {:>10} {:>8.1} {:>14.3e} {:>14.3e} {:>8.2}",
+                "{:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>8.0}",
                 h_over_dx,
                 threads,
                 n,
                 neighbours,
                 psps,
                 pairs,
-                1e9 / pairs
+                1e9 / pairs,
+                share(t.neighbours - t.reorder),
+                share(t.reorder),
+                share(t.rates),
+                share(integration),
+                bytes
             );
             results.push(json!({
                 "case": "dam-break-2d", "h_over_dx": h_over_dx, "threads": threads, "particles": n,
