@@ -113,28 +113,37 @@ pub fn reference_gamma_polygon(kernel: &Wendland, x: DVec2, poly: &[DVec2]) -> f
         0.2223810344533745,
         0.1012285362903763,
     ];
+    let integrand = |th: f64| {
+        let dir = DVec2::new(th.cos(), th.sin());
+        let mut r = s;
+        for &(normal, dist) in &edges {
+            let c = normal.dot(dir);
+            if c > 0.0 {
+                r = r.min(dist / c);
+            }
+        }
+        radial_mass(kernel, r)
+    };
+    let gauss = |a: f64, b: f64| {
+        let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+        (0..8)
+            .map(|k| W[k] * half * integrand(mid + half * X[k]))
+            .sum::<f64>()
+    };
+    // Adaptive bisection: near a wall R(theta) varies on the scale of the distance to it.
+    fn adapt(gauss: &dyn Fn(f64, f64) -> f64, a: f64, b: f64, whole: f64, depth: u32) -> f64 {
+        let m = 0.5 * (a + b);
+        let (left, right) = (gauss(a, m), gauss(m, b));
+        if depth == 0 || (left + right - whole).abs() < 1e-15 {
+            return left + right;
+        }
+        adapt(gauss, a, m, left, depth - 1) + adapt(gauss, m, b, right, depth - 1)
+    }
     let mut total = 0.0;
     for w in cuts.windows(2) {
         let (t0, t1) = (w[0], w[1]);
-        if t1 <= t0 {
-            continue;
-        }
-        let panels = 4;
-        let width = (t1 - t0) / panels as f64;
-        for p in 0..panels {
-            let mid = t0 + (p as f64 + 0.5) * width;
-            for k in 0..8 {
-                let th = mid + 0.5 * width * X[k];
-                let dir = DVec2::new(th.cos(), th.sin());
-                let mut r = s;
-                for &(normal, dist) in &edges {
-                    let c = normal.dot(dir);
-                    if c > 0.0 {
-                        r = r.min(dist / c);
-                    }
-                }
-                total += W[k] * 0.5 * width * radial_mass(kernel, r);
-            }
+        if t1 > t0 {
+            total += adapt(&gauss, t0, t1, gauss(t0, t1), 40);
         }
     }
     total
