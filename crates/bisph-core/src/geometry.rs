@@ -151,6 +151,34 @@ pub fn box_elements_3d(
     out
 }
 
+/// Splits every quadrilateral patch into two triangles (alternating diagonals, so a flat wall
+/// gets triangles of both orientations); triangles and other shapes pass through.
+pub fn triangulate(shapes: Vec<ElementShape<DVec3>>) -> Vec<ElementShape<DVec3>> {
+    let mut out = Vec::with_capacity(2 * shapes.len());
+    for (k, s) in shapes.into_iter().enumerate() {
+        if s.corners.len() != 4 {
+            out.push(s);
+            continue;
+        }
+        let c = &s.corners;
+        let halves = if k % 2 == 0 {
+            [[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
+        } else {
+            [[c[0], c[1], c[3]], [c[1], c[2], c[3]]]
+        };
+        for t in halves {
+            let area = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
+            out.push(ElementShape {
+                centre: (t[0] + t[1] + t[2]) / 3.0,
+                normal: s.normal,
+                area,
+                corners: t.to_vec(),
+            });
+        }
+    }
+    out
+}
+
 /// Lattice points `min + (k + 1/2) dx` inside the box `[min, max]`.
 pub fn lattice_box<V: Vector>(min: V, max: V, dx: f64) -> Vec<V> {
     let mut counts = [1usize; 3];

@@ -150,6 +150,36 @@ impl<V: Vector> CellGrid<V> {
         }
     }
 
+    /// Calls `visit(j)` for every point `j` in the cells that can hold points within `radius`
+    /// of `x` (a superset of them, for radii larger than one cell as well).
+    pub fn for_each_candidate_within(&self, x: V, radius: f64, mut visit: impl FnMut(usize)) {
+        let span = ((radius * self.inv_cell).ceil() as i64).max(1);
+        let c = self.coords(x);
+        let mut lo = [0usize; 3];
+        let mut hi = [0usize; 3];
+        for k in 0..3 {
+            let d = self.dims[k] as i64;
+            let s = if k < V::DIM { span } else { 0 };
+            let a = (c[k] - s).max(0);
+            let b = (c[k] + s).min(d - 1);
+            if a > b {
+                return;
+            }
+            lo[k] = a as usize;
+            hi[k] = b as usize;
+        }
+        for cz in lo[2]..=hi[2] {
+            for cy in lo[1]..=hi[1] {
+                let row = self.dims[0] * (cy + self.dims[1] * cz);
+                let start = self.cell_start[row + lo[0]] as usize;
+                let end = self.cell_start[row + hi[0] + 1] as usize;
+                for &j in &self.items[start..end] {
+                    visit(j as usize);
+                }
+            }
+        }
+    }
+
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` for every point with
     /// `|r_ij| < radius`.
     #[inline(always)]

@@ -8,8 +8,10 @@ pub mod build;
 pub mod case;
 pub mod output;
 pub mod paper1_cases;
+pub mod paper2_cases;
 pub mod plot;
 pub mod runner;
+pub mod shepard;
 pub mod validate;
 pub mod vtk;
 

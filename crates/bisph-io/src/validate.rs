@@ -106,6 +106,7 @@ pub trait ValidationCase: Sync {
 pub fn registry() -> Vec<Box<dyn ValidationCase>> {
     let mut cases = Vec::new();
     cases.extend(crate::paper1_cases::cases());
+    cases.extend(crate::paper2_cases::cases());
     cases
 }
 

@@ -23,6 +23,24 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Run validation cases and compare them with their references.
     Validate(ValidateArgs),
+    /// Print the Shepard factor gamma of a case's walls at given points (`x,y[,z],gamma`).
+    Shepard(ShepardArgs),
+}
+
+#[derive(clap::Args)]
+struct ShepardArgs {
+    /// Case file (TOML): its walls, and its fluid for `--method discrete`.
+    case: PathBuf,
+    /// CSV file of points, `x,y` or `x,y,z` per line (optional header).
+    #[arg(long)]
+    points: PathBuf,
+    /// `discrete` (sum over the case's fluid particles), `geometric` (walls only, paper 2)
+    /// or `integrated` (not implemented yet).
+    #[arg(long, default_value = "geometric")]
+    method: bisph_io::shepard::ShepardMethod,
+    /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
 }
 
 #[derive(clap::Args)]
@@ -66,6 +84,7 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(args)) => bench::bench(args),
         Some(Command::Validate(args)) => validate(args),
+        Some(Command::Shepard(args)) => shepard(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -139,6 +158,14 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
         }
         Err(e) => Err((1, e.to_string())),
     }
+}
+
+fn shepard(args: ShepardArgs) -> Result<(), (u8, String)> {
+    let loaded = load_case(Some(&args.case), &args.overrides).map_err(|e| (1, e.to_string()))?;
+    let table =
+        bisph_io::shepard::shepard_table(&loaded, &args.points, args.method).map_err(|e| (1, e))?;
+    print!("{table}");
+    Ok(())
 }
 
 fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {

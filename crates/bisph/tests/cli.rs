@@ -488,3 +488,62 @@ fn divergence_stops_cleanly_and_names_the_particle() {
             > 1
     );
 }
+
+/// `bisph shepard`: gamma at given points by each method, and named errors for bad points.
+#[test]
+fn shepard_prints_gamma_and_names_bad_points() {
+    let dir = temp_dir("shepard");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, VALID).unwrap();
+    let points = dir.join("points.csv");
+    std::fs::write(&points, "x,y\n0.5,0.0\n0.0,0.0\n0.25,0.25\n").unwrap();
+    let p = points.to_str().unwrap();
+    let c = case.to_str().unwrap();
+    let out = bisph(&["shepard", c, "--points", p, "--method", "geometric"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert!(text.starts_with("x,y,gamma\n"), "{text}");
+    assert!((rows[0][2] - 0.5).abs() < 1e-10, "{text}");
+    assert!((rows[1][2] - 0.25).abs() < 1e-10, "{text}");
+    assert!((rows[2][2] - 1.0).abs() < 1e-12, "{text}");
+    // Discrete: the fluid block fills [0, 0.5]^2 on a lattice, so gamma ~ 1 inside it.
+    let out = bisph(&["shepard", c, "--points", p, "--method", "discrete"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let g: f64 = text
+        .lines()
+        .nth(3)
+        .unwrap()
+        .split(',')
+        .nth(2)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((g - 1.0).abs() < 0.02, "{text}");
+    // Bad input: named file and line, exit code 1, no panic.
+    std::fs::write(&points, "0.1,0.2\n0.3;0.4\n").unwrap();
+    let out = bisph(&["shepard", c, "--points", p, "--method", "geometric"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("points.csv: line 2") && !err.contains("panicked"),
+        "{err}"
+    );
+    let out = bisph(&["shepard", c, "--points", "/nonexistent.csv"]);
+    assert_eq!(out.status.code(), Some(1));
+    let out = bisph(&["shepard", c, "--points", p, "--method", "magic"]);
+    assert!(!out.status.success());
+    std::fs::write(&points, "0.1,0.2\n").unwrap();
+    let out = bisph(&["shepard", c, "--points", p, "--method", "integrated"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented"));
+}

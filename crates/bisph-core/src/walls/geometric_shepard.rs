@@ -11,10 +11,11 @@
 //! 2-D segments are integrated in closed form: each segment is clipped to the support circle,
 //! the polynomial part uses `int (a^2 + u^2)^(k/2) du` exactly, and the divergent part is
 //! `-theta / (2 pi)` with `theta` the signed angle the clipped segment subtends (paper 2,
-//! eqs 13-15). A point on a wall is evaluated a distance `1e-9 h` inside the fluid, the limit
+//! eqs 13-15). A point on a wall is evaluated a distance `1e-12 h` inside the fluid, the limit
 //! from the fluid side (`gamma = 1/2` on a flat wall, `1/4` at a right-angled corner).
-//! 3-D patches use a one-point polynomial rule and the exact solid angle (see
-//! [`patch_contribution`]).
+//! 3-D planar elements (triangles, quadrilateral patches) are integrated exactly as well, in
+//! polar coordinates about the foot of the perpendicular (see [`patch_contribution`]), with
+//! `F = [21q^5/1024 - 45q^4/256 + 35q^3/64 - 21q^2/32 + 7/16] / (pi h^3) - 1 / (4 pi q^3 h^3)`.
 
 use super::BoundaryElements;
 use crate::dim::Vector;
@@ -59,8 +60,9 @@ pub fn segment_contribution(kernel: &Wendland, x: DVec2, p0: DVec2, p1: DVec2, n
     let t = d / length;
     // Work in units of h, with the foot of the perpendicular from x as origin along t.
     let a = (p0 - x).dot(n) / h; // signed normal distance, > 0 on the fluid side
+                                 // Both ends from their own offsets (not `s0 + length`): exact near a corner at `x`.
     let s0 = (p0 - x).dot(t) / h;
-    let s1 = s0 + length / h;
+    let s1 = (p1 - x).dot(t) / h;
     let half_chord2 = 4.0 - a * a;
     if half_chord2 <= 0.0 {
         return 0.0;
@@ -80,37 +82,152 @@ pub fn segment_contribution(kernel: &Wendland, x: DVec2, p0: DVec2, p1: DVec2, n
     polynomial - theta / (2.0 * PI)
 }
 
-/// Contribution of the planar quadrilateral patch `corners` (3-D) with outward normal `n`
-/// to `gamma(x) - 1`: `r_n F_P(q) s / h^3` at the patch centre (one-point rule) minus
-/// `Omega / (4 pi)`, the exact solid angle the patch subtends (two triangles by the
-/// Van Oosterom-Strackee formula), signed positive on the fluid side. Elements whose
-/// centre lies beyond the support are skipped. An approximation of paper 2's eqs 16-17
-/// that is exact in the limit of small patches.
+/// `Phi(q) = int q F_P(q) dq` (3-D, kernel units), the radial antiderivative of the polynomial
+/// part: `int_0^rho F_P(q) rho' drho' = Phi(q(rho)) - Phi(|a|)` with `q^2 = a^2 + rho^2`.
+fn phi3(q: f64) -> f64 {
+    let q2 = q * q;
+    let q4 = q2 * q2;
+    (7.0 * q2 / 32.0 - 21.0 * q4 / 128.0 + 7.0 * q4 * q / 64.0 - 15.0 * q4 * q2 / 512.0
+        + 3.0 * q4 * q2 * q / 1024.0)
+        / PI
+}
+
+/// Antiderivatives `int_0^t (A + s^2)^(k/2) ds` for `k = -1, 0, 1, 2, 3, 4, 5` (`A > 0`).
+fn moments3(big_a: f64, t: f64) -> [f64; 7] {
+    let t2 = t * t;
+    let r = (big_a + t2).sqrt();
+    let ash = (t / big_a.sqrt()).asinh();
+    [
+        ash,
+        t,
+        0.5 * (t * r + big_a * ash),
+        big_a * t + t * t2 / 3.0,
+        t * (2.0 * t2 + 5.0 * big_a) * r / 8.0 + 3.0 * big_a * big_a / 8.0 * ash,
+        big_a * big_a * t + 2.0 * big_a * t * t2 / 3.0 + t * t2 * t2 / 5.0,
+        t * (8.0 * t2 * t2 + 26.0 * big_a * t2 + 33.0 * big_a * big_a) * r / 48.0
+            + 5.0 * big_a * big_a * big_a / 16.0 * ash,
+    ]
+}
+
+/// Fan triangle of one polygon edge (paper 2, eqs 16-17, integrated exactly): the part of the
+/// triangle (foot of the perpendicular, `p(t0)`, `p(t1)`) inside the support, with the edge
+/// line `p(t) = d nu + t tau` at signed in-plane distance `d` (> 0 counter-clockwise) and the
+/// point at signed height `a` (> 0 on the fluid side), all in units of `h`. Returns
+/// `a int F(q) dS` over it, `F = F_P - 1/(4 pi q^3)`.
+///
+/// In polar coordinates about the foot, `a int_0^rho_max F rho drho` is
+/// `a [Phi(Q) - Phi(|a|)] - sign(a) (1 - |a|/Q) / (4 pi)` with `Q = q(rho_max)`; on the edge
+/// `dtheta = d dt / (d^2 + t^2)`, and `int (A + t^2)^(k/2) / (d^2 + t^2) dt`, `A = a^2 + d^2`,
+/// follows from `f_k = (A + t^2)^(k/2 - 1) + a^2 f_(k-2)` down to `atan` terms. Where the edge
+/// leaves the support the remaining angle sees `Q = 2`.
+fn edge_integral(a: f64, d: f64, t0: f64, t1: f64) -> f64 {
+    let sa = if a >= 0.0 { 1.0 } else { -1.0 };
+    let (aa, ad) = (a.abs(), d.abs());
+    let rb2 = 4.0 - a * a;
+    let phi_a = phi3(aa);
+    let arc_value = a * (phi3(2.0) - phi_a) - sa * (1.0 - 0.5 * aa) / (4.0 * PI);
+    let angle = |t: f64| (t / d).atan();
+    if ad * ad >= rb2 {
+        return arc_value * (angle(t1) - angle(t0));
+    }
+    let tb = (rb2 - d * d).sqrt();
+    let mut total = 0.0;
+    if t0 < -tb {
+        total += arc_value * (angle(t1.min(-tb)) - angle(t0));
+    }
+    if t1 > tb {
+        total += arc_value * (angle(t1) - angle(t0.max(tb)));
+    }
+    let (u0, u1) = (t0.max(-tb), t1.min(tb));
+    if u0 < u1 {
+        let a2 = a * a;
+        let big_a = a2 + d * d;
+        let (m1, m0) = (moments3(big_a, u1), moments3(big_a, u0));
+        let i: Vec<f64> = m1.iter().zip(&m0).map(|(x, y)| x - y).collect();
+        let e0 = angle(u1) - angle(u0);
+        let tilt = |t: f64| (aa * t).atan2(ad * (big_a + t * t).sqrt());
+        // |a| d int dt / ((d^2 + t^2) sqrt(A + t^2)).
+        let g = d.signum() * (tilt(u1) - tilt(u0));
+        let e2 = d * i[1] + a2 * e0;
+        let e4 = d * i[3] + a2 * e2;
+        let e6 = d * i[5] + a2 * e4;
+        let e1 = d * i[0] + aa * g;
+        let e3 = d * i[2] + a2 * e1;
+        let e5 = d * i[4] + a2 * e3;
+        let e7 = d * i[6] + a2 * e5;
+        let poly = (7.0 * e2 / 32.0 - 21.0 * e4 / 128.0 + 7.0 * e5 / 64.0 - 15.0 * e6 / 512.0
+            + 3.0 * e7 / 1024.0)
+            / PI;
+        total += a * (poly - phi_a * e0) - sa * (e0 - g) / (4.0 * PI);
+    }
+    total
+}
+
+/// Contribution of the planar polygon `corners` (3-D: a triangle or a quadrilateral patch) with
+/// outward normal `n` to `gamma(x) - 1`, `r_n int_{S cap B} F(|y - x|) dS` (paper 2, eqs 8 and
+/// 16-17), exact: the element is clipped to the support sphere and integrated in polar
+/// coordinates about the foot of the perpendicular from `x`, one fan triangle per edge
+/// ([`edge_integral`]); the divergent part is `-Omega/(4 pi)` with `Omega` the solid angle of
+/// the clipped element, signed positive on the fluid side. Holds for triangles and for square
+/// patches alike, and for a foot inside or outside the element.
 pub fn patch_contribution(
     kernel: &Wendland,
     x: DVec3,
     corners: &[DVec3],
     n: DVec3,
-    area: f64,
+    _area: f64,
 ) -> f64 {
     let h = kernel.h;
-    let centre = corners.iter().copied().sum::<DVec3>() / corners.len() as f64;
-    let r = centre - x;
-    let q = r.length() / h;
-    if q >= 2.0 {
+    if corners.len() < 3 {
         return 0.0;
     }
-    let rn = r.dot(n);
-    let polynomial = (21.0 * q.powi(5) / 1024.0 - 45.0 * q.powi(4) / 256.0
-        + 35.0 * q.powi(3) / 64.0
-        - 21.0 * q * q / 32.0
-        + 7.0 / 16.0)
-        / PI;
-    let mut omega = 0.0;
-    for k in 1..corners.len() - 1 {
-        omega += triangle_solid_angle(corners[0] - x, corners[k] - x, corners[k + 1] - x).abs();
+    let a = (corners[0] - x).dot(n) / h;
+    if a.abs() >= 2.0 {
+        return 0.0;
     }
-    rn * polynomial * area / (h * h * h) - rn.signum() * omega / (4.0 * PI)
+    let e1 = n.any_orthonormal_vector();
+    let e2 = n.cross(e1);
+    let foot = x + n * (a * h);
+    let mut pts = [DVec2::ZERO; 8];
+    let m = corners.len().min(8);
+    for (p, &c) in pts.iter_mut().zip(corners) {
+        let r = (c - foot) / h;
+        *p = DVec2::new(r.dot(e1), r.dot(e2));
+    }
+    let pts = &pts[..m];
+    let centroid = pts.iter().copied().sum::<DVec2>() / m as f64;
+    let radius = pts
+        .iter()
+        .map(|&p| (p - centroid).length())
+        .fold(0.0, f64::max);
+    let rb = (4.0 - a * a).sqrt();
+    if centroid.length() - radius >= rb {
+        return 0.0;
+    }
+    let mut twice_area = 0.0;
+    let mut sum = 0.0;
+    for k in 0..m {
+        let (p0, p1) = (pts[k], pts[(k + 1) % m]);
+        twice_area += p0.perp_dot(p1);
+        let edge = p1 - p0;
+        let length = edge.length();
+        if length == 0.0 {
+            continue;
+        }
+        let tau = edge / length;
+        // `p0 x p1 / L`: exactly antisymmetric, so an edge shared by two elements cancels.
+        let d = p0.perp_dot(p1) / length;
+        if d == 0.0 {
+            continue; // the foot is on this edge's line: an empty fan triangle
+        }
+        // Both ends from their own offsets: exact when a corner is next to the foot.
+        sum += edge_integral(a, d, p0.dot(tau), p1.dot(tau));
+    }
+    if twice_area < 0.0 {
+        -sum
+    } else {
+        sum
+    }
 }
 
 /// Solid angle subtended by the triangle with corners at `a`, `b`, `c` (relative to the
@@ -124,7 +241,9 @@ pub fn triangle_solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 /// Geometric Shepard factor at `x` from the wall elements near it (paper 2, eq 8).
 ///
-/// A point on a wall element is first moved `1e-9 h` into the fluid (the one-sided limit).
+/// A point on a wall element is first moved `1e-12 h` into the fluid, along the sum of the
+/// inward normals of the elements it lies on (the one-sided limit, exact to about `1e-12`).
+/// Every element that overlaps the support is visited, whatever the grid's cell size.
 pub fn gamma<V: Vector>(
     kernel: &Wendland,
     x: V,
@@ -132,9 +251,11 @@ pub fn gamma<V: Vector>(
     grid: &CellGrid<V>,
 ) -> f64 {
     let mut x = x;
-    let eps = 1e-9 * kernel.h;
-    grid.for_each_candidate(x, |j| {
-        let r = elements.centre[j] - x;
+    let eps = 1e-12 * kernel.h;
+    let radius = kernel.support + elements.max_reach;
+    let x0 = x;
+    grid.for_each_candidate_within(x0, radius, |j| {
+        let r = elements.centre[j] - x0;
         let rn = r.dot(elements.normal[j]);
         if rn.abs() < eps
             && (r - elements.normal[j] * rn).length() <= elements.reach[j] * (1.0 + 1e-12)
@@ -143,7 +264,7 @@ pub fn gamma<V: Vector>(
         }
     });
     let mut gamma = 1.0;
-    grid.for_each_candidate(x, |j| {
+    grid.for_each_candidate_within(x, radius, |j| {
         gamma += V::wall_gamma_contribution(
             kernel,
             x,
@@ -251,8 +372,195 @@ mod tests {
             assert!((g - r).abs() < 1e-9, "({x},{y}): {g} vs {r}");
         }
         // On the wall and at a corner: exact limits.
-        assert!((gamma(&kernel, DVec2::new(0.5, 0.0), &e, &grid) - 0.5).abs() < 1e-8);
-        assert!((gamma(&kernel, DVec2::new(0.503, 0.0), &e, &grid) - 0.5).abs() < 1e-8);
-        assert!((gamma(&kernel, DVec2::new(0.0, 0.0), &e, &grid) - 0.25).abs() < 1e-8);
+        assert!((gamma(&kernel, DVec2::new(0.5, 0.0), &e, &grid) - 0.5).abs() < 1e-10);
+        assert!((gamma(&kernel, DVec2::new(0.503, 0.0), &e, &grid) - 0.5).abs() < 1e-10);
+        assert!((gamma(&kernel, DVec2::new(0.0, 0.0), &e, &grid) - 0.25).abs() < 1e-10);
+        assert!((gamma(&kernel, DVec2::new(1.0, 1.0), &e, &grid) - 0.25).abs() < 1e-10);
+    }
+
+    /// Volume integral of W over the box's interior within the support of `x`: iterated Gauss
+    /// quadrature over exact limits, each range split at the point's own coordinate.
+    fn reference_gamma_3d(kernel: &Wendland, x: DVec3, lo: DVec3, hi: DVec3) -> f64 {
+        let s = kernel.support;
+        let split = |a: f64, b: f64, c: f64, panels: usize, f: &mut dyn FnMut(f64) -> f64| {
+            if b <= a {
+                return 0.0;
+            }
+            if c > a && c < b {
+                gauss(a, c, panels, &mut *f) + gauss(c, b, panels, &mut *f)
+            } else {
+                gauss(a, b, panels, &mut *f)
+            }
+        };
+        let panels = 10;
+        split(
+            (x.z - s).max(lo.z),
+            (x.z + s).min(hi.z),
+            x.z,
+            panels,
+            &mut |z| {
+                let dz = z - x.z;
+                let ry = (s * s - dz * dz).max(0.0).sqrt();
+                split(
+                    (x.y - ry).max(lo.y),
+                    (x.y + ry).min(hi.y),
+                    x.y,
+                    panels,
+                    &mut |y| {
+                        let dy = y - x.y;
+                        let rx = (s * s - dz * dz - dy * dy).max(0.0).sqrt();
+                        split(
+                            (x.x - rx).max(lo.x),
+                            (x.x + rx).min(hi.x),
+                            x.x,
+                            panels,
+                            &mut |xx| kernel.value(DVec3::new(xx - x.x, dy, dz).length()),
+                        )
+                    },
+                )
+            },
+        )
+    }
+
+    fn walls_3d(shapes: Vec<crate::geometry::ElementShape<DVec3>>) -> BoundaryElements<DVec3> {
+        let mut e = BoundaryElements::default();
+        for s in shapes {
+            e.push(s.centre, s.normal, s.area, 0, &s.corners);
+        }
+        e
+    }
+
+    /// The unit cube's walls three ways: square patches, triangles, and faces with patches of
+    /// unequal sizes.
+    fn cube_walls(dx: f64) -> Vec<(&'static str, BoundaryElements<DVec3>)> {
+        use crate::geometry::{box_elements_3d, rectangle_elements, triangulate};
+        let (lo, hi) = (DVec3::ZERO, DVec3::ONE);
+        let patches = box_elements_3d(lo, hi, &[], dx);
+        let triangles = triangulate(patches.clone());
+        let mut mixed = Vec::new();
+        for k in 0..6 {
+            let axis = k / 2;
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let mut origin = lo;
+            let mut normal = DVec3::ZERO;
+            normal[axis] = if k % 2 == 1 { 1.0 } else { -1.0 };
+            if k % 2 == 1 {
+                origin[axis] = hi[axis];
+            }
+            let (mut e1, mut e2) = (DVec3::ZERO, DVec3::ZERO);
+            e1[u] = 1.0;
+            e2[v] = 1.0;
+            let size = dx * [1.0, 0.73, 1.31][axis];
+            let face = rectangle_elements(origin, e1, e2, normal, size);
+            mixed.extend(if k % 2 == 0 { triangulate(face) } else { face });
+        }
+        vec![
+            ("square patches", walls_3d(patches)),
+            ("triangles", walls_3d(triangles)),
+            ("unequal mixed elements", walls_3d(mixed)),
+        ]
+    }
+
+    #[test]
+    fn exact_3d_limits_on_walls_edges_and_corners() {
+        let kernel = Wendland::new(0.1, 3);
+        for (name, e) in cube_walls(0.05) {
+            let mut grid = CellGrid::new(kernel.support);
+            grid.rebuild(&e.centre);
+            let g = |x: f64, y: f64, z: f64| gamma(&kernel, DVec3::new(x, y, z), &e, &grid);
+            for (p, expected) in [
+                ((0.5, 0.5, 0.0), 0.5),
+                ((0.5, 0.5, 1.0), 0.5),
+                ((0.525, 0.5, 0.0), 0.5), // a patch edge or a triangle diagonal
+                ((0.55, 0.45, 1.0), 0.5), // a patch vertex
+                ((0.313, 0.0, 0.77), 0.5), // anywhere
+                ((0.5, 0.0, 0.0), 0.25),
+                ((1.0, 0.37, 1.0), 0.25),
+                ((0.0, 0.0, 0.0), 0.125),
+                ((1.0, 1.0, 1.0), 0.125),
+                ((1.0, 0.0, 1.0), 0.125),
+                ((0.5, 0.5, 0.5), 1.0),
+            ] {
+                let v = g(p.0, p.1, p.2);
+                assert!(
+                    (v - expected).abs() < 1e-10,
+                    "{name} at {p:?}: {v} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn exact_3d_matches_volume_integral_near_walls_edges_and_corners() {
+        let kernel = Wendland::new(0.1, 3);
+        let points = [
+            DVec3::new(0.5, 0.5, 0.03),
+            DVec3::new(0.51, 0.47, 0.17),
+            DVec3::new(0.5, 0.02, 0.05),
+            DVec3::new(0.03, 0.02, 0.05),
+            DVec3::new(0.013, 0.171, 0.007),
+            DVec3::new(0.96, 0.99, 0.93),
+        ];
+        let refs: Vec<f64> = points
+            .iter()
+            .map(|&p| reference_gamma_3d(&kernel, p, DVec3::ZERO, DVec3::ONE))
+            .collect();
+        for (name, e) in cube_walls(0.05) {
+            let mut grid = CellGrid::new(kernel.support);
+            grid.rebuild(&e.centre);
+            for (&p, &r) in points.iter().zip(&refs) {
+                let v = gamma(&kernel, p, &e, &grid);
+                eprintln!(
+                    "{name} at {p}: gamma {v:.15} reference {r:.15} diff {:.2e}",
+                    v - r
+                );
+                assert!((v - r).abs() < 1e-10, "{name} at {p}: {v} vs {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn divergent_part_is_the_solid_angle_of_a_small_element() {
+        // An element entirely inside the support: the divergent part of the exact integral is
+        // -Omega / 4 pi, Omega from Van Oosterom-Strackee; the polynomial part is smooth.
+        let kernel = Wendland::new(1.0, 3);
+        let corners = [
+            DVec3::new(0.1, -0.2, 0.3),
+            DVec3::new(0.4, 0.1, 0.3),
+            DVec3::new(-0.1, 0.3, 0.3),
+        ];
+        let n = DVec3::Z;
+        for x in [DVec3::new(0.05, 0.0, 0.0), DVec3::new(0.9, 0.6, -0.2)] {
+            let exact = patch_contribution(&kernel, x, &corners, n, 0.0);
+            let omega = triangle_solid_angle(corners[0] - x, corners[1] - x, corners[2] - x).abs();
+            // Polynomial part by a fine midpoint rule on barycentric sub-triangles.
+            let m = 400;
+            let mut poly = 0.0;
+            let (a, b, c) = (corners[0], corners[1], corners[2]);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            for i in 0..m {
+                for j in 0..m - i {
+                    for (u, v, w) in [
+                        ((i as f64 + 1.0 / 3.0), (j as f64 + 1.0 / 3.0), 1.0),
+                        ((i as f64 + 2.0 / 3.0), (j as f64 + 2.0 / 3.0), -1.0),
+                    ] {
+                        if w < 0.0 && i + j + 1 >= m {
+                            continue;
+                        }
+                        let y = a + (b - a) * (u / m as f64) + (c - a) * (v / m as f64);
+                        let q = (y - x).length();
+                        let fp = (21.0 * q.powi(5) / 1024.0 - 45.0 * q.powi(4) / 256.0
+                            + 35.0 * q.powi(3) / 64.0
+                            - 21.0 * q * q / 32.0
+                            + 7.0 / 16.0)
+                            / PI;
+                        poly += fp * area / (m * m) as f64;
+                    }
+                }
+            }
+            let rn = (a - x).dot(n);
+            let expected = rn * poly - omega / (4.0 * PI);
+            assert!((exact - expected).abs() < 1e-6, "{exact} vs {expected}");
+        }
     }
 }

@@ -33,6 +33,9 @@ pub struct BoundaryElements<V: Vector> {
     pub body: Vec<u32>,
     /// Largest distance from the centre to a corner (the element's reach in its plane).
     pub reach: Vec<f64>,
+    /// Largest [`BoundaryElements::reach`] of all elements (for searches that must find every
+    /// element overlapping a kernel support).
+    pub max_reach: f64,
     /// Wall pressure on each element, refreshed by the wall model before each rate sweep
     /// (paper 1 eq 71 for the energy-conserving walls; extrapolated from the fluid for `bi`).
     pub pressure: Vec<f64>,
@@ -72,12 +75,12 @@ impl<V: Vector> BoundaryElements<V> {
         self.velocity.push(V::ZERO);
         self.body.push(body);
         self.pressure.push(0.0);
-        self.reach.push(
-            corners
-                .iter()
-                .map(|&c| (c - centre).length())
-                .fold(0.0, f64::max),
-        );
+        let reach = corners
+            .iter()
+            .map(|&c| (c - centre).length())
+            .fold(0.0, f64::max);
+        self.reach.push(reach);
+        self.max_reach = self.max_reach.max(reach);
         self.reference_centre.push(centre);
         self.reference_normal.push(normal);
         self.reference_corners.extend_from_slice(corners);
