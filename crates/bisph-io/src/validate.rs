@@ -37,8 +37,20 @@ pub struct Check {
 
 impl Check {
     /// A check of `value` against `reference` with `tolerance`.
-    pub fn new(quantity: &str, value: f64, reference: f64, tolerance: Tolerance, source: &str) -> Self {
-        Check { quantity: quantity.into(), value, reference, tolerance, source: source.into() }
+    pub fn new(
+        quantity: &str,
+        value: f64,
+        reference: f64,
+        tolerance: Tolerance,
+        source: &str,
+    ) -> Self {
+        Check {
+            quantity: quantity.into(),
+            value,
+            reference,
+            tolerance,
+            source: source.into(),
+        }
     }
 
     /// `true` when the value is within tolerance (a NaN never passes).
@@ -123,10 +135,17 @@ pub fn table(reports: &[CaseReport]) -> String {
 /// `report.md`: the table, the notes and the plots of every case.
 pub fn markdown(reports: &[CaseReport], quick: bool) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# bisph validation report ({})\n", if quick { "quick" } else { "full" });
+    let _ = writeln!(
+        s,
+        "# bisph validation report ({})\n",
+        if quick { "quick" } else { "full" }
+    );
     for r in reports {
         let _ = writeln!(s, "## {} ({:.1} s)\n", r.name, r.wall_seconds);
-        let _ = writeln!(s, "| quantity | value | reference | tolerance | pass | source |");
+        let _ = writeln!(
+            s,
+            "| quantity | value | reference | tolerance | pass | source |"
+        );
         let _ = writeln!(s, "| --- | ---: | ---: | --- | --- | --- |");
         for c in &r.checks {
             let _ = writeln!(

@@ -153,15 +153,29 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     for name in &args.names {
         if !cases.iter().any(|c| c.name() == name) {
             let known: Vec<&str> = cases.iter().map(|c| c.name()).collect();
-            return Err((1, format!("unknown validation case `{name}`; known: {}", known.join(", "))));
+            return Err((
+                1,
+                format!(
+                    "unknown validation case `{name}`; known: {}",
+                    known.join(", ")
+                ),
+            ));
         }
     }
     let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
-    std::fs::create_dir_all(&out).map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
+    std::fs::create_dir_all(&out)
+        .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
     let mut reports = Vec::new();
     let mut failed = Vec::new();
-    for case in cases.iter().filter(|c| args.names.is_empty() || args.names.iter().any(|n| n == c.name())) {
-        eprintln!("validating {} ({})", case.name(), if args.quick { "quick" } else { "full" });
+    for case in cases
+        .iter()
+        .filter(|c| args.names.is_empty() || args.names.iter().any(|n| n == c.name()))
+    {
+        eprintln!(
+            "validating {} ({})",
+            case.name(),
+            if args.quick { "quick" } else { "full" }
+        );
         let started = std::time::Instant::now();
         match case.run(args.quick, &out.join(case.name())) {
             Ok(mut report) => {
@@ -185,6 +199,9 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     if failed.is_empty() {
         Ok(())
     } else {
-        Err((2, format!("out of tolerance or failed: {}", failed.join(", "))))
+        Err((
+            2,
+            format!("out of tolerance or failed: {}", failed.join(", ")),
+        ))
     }
 }
