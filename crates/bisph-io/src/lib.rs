@@ -7,8 +7,11 @@
 pub mod build;
 pub mod case;
 pub mod output;
+pub mod pack;
 pub mod plot;
+pub mod regions;
 pub mod runner;
+pub mod shapes;
 pub mod validate;
 pub mod vtk;
 

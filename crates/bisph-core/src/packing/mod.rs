@@ -59,7 +59,8 @@ pub struct PackParams {
     /// over `plateau_window` iterations (0: never).
     pub stage_c_tolerance: f64,
     /// Evaluate the metrics over all particles every this many iterations during stage 2a
-    /// (stage 2c evaluates everyone anyway).
+    /// (default 10; in between only particles near a wall are evaluated, and the metrics are
+    /// NaN). Stage 2c evaluates everyone anyway.
     pub report_interval: usize,
 }
 
@@ -79,7 +80,7 @@ impl PackParams {
             freeze_distance: 0.6,
             stage_c_iterations: 1000,
             stage_c_tolerance: 0.0,
-            report_interval: 1,
+            report_interval: 10,
         }
     }
 }
