@@ -8,6 +8,7 @@ pub mod build;
 pub mod case;
 pub mod output;
 pub mod pack;
+pub mod pack_cases;
 pub mod plot;
 pub mod regions;
 pub mod runner;

@@ -104,7 +104,9 @@ pub trait ValidationCase: Sync {
 
 /// Every validation case bisph knows.
 pub fn registry() -> Vec<Box<dyn ValidationCase>> {
-    Vec::new()
+    let mut cases = Vec::new();
+    cases.extend(crate::pack_cases::cases());
+    cases
 }
 
 /// The table printed on stdout.
