@@ -74,7 +74,9 @@ pub fn pack_block<V: CaseDim>(
     }
     let dx = block.dx.unwrap_or(case.resolution.dx);
     let params = pack_params(case, dx);
-    let element_size = dx * case.resolution.element_over_dx;
+    // The wall integrals are exact for elements of any size: elements as large as the
+    // support keep the count (and the cost) down.
+    let element_size = (dx * case.resolution.element_over_dx).max(2.0 * params.h);
     let region = V::block_region(loaded, &key, block, dx, element_size)?;
     let walls = PackWalls::new(&region.elements, 2.0 * params.h);
     let mut packer = Packer::new(params, region.lattice.clone(), walls)

@@ -153,5 +153,27 @@ pub fn cases() -> Vec<Box<dyn ValidationCase>> {
             ],
             full: &[],
         }),
+        Box::new(PackCase {
+            name: "pack-sphere-3d",
+            description: "BIPI in 3-D: a sphere from a generated closed triangle mesh",
+            file: "pack-sphere-3d.toml",
+            quick: &[
+                "resolution.dx=0.1",
+                "pack.stage_a_max=300",
+                "pack.stage_c_iterations=100",
+            ],
+            full: &[],
+        }),
+        Box::new(PackCase {
+            name: "pack-torus-3d",
+            description: "BIPI in 3-D: a torus read from a binary STL file",
+            file: "pack-torus-3d.toml",
+            quick: &[
+                "resolution.dx=0.04",
+                "pack.stage_a_max=200",
+                "pack.stage_c_iterations=100",
+            ],
+            full: &[],
+        }),
     ]
 }

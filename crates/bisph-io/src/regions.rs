@@ -159,9 +159,9 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
         "sphere" => {
             let c = DVec3::from_slice(s.centre.as_deref().unwrap_or(&[0.0; 3]));
             let r = s.radius.unwrap_or(1.0);
-            // Default: icosphere edges of about dx (edge ~ 1.05 r / 2^n).
+            // Default: icosphere edges of about 2 dx (edge ~ 1.05 r / 2^n).
             let n = s.subdivisions.unwrap_or_else(|| {
-                ((1.05 * r * t.scale / dx).log2().ceil().max(0.0) as u32).min(7)
+                ((1.05 * r * t.scale / (2.0 * dx)).log2().ceil().max(0.0) as u32).min(7)
             });
             let m = TriMesh::icosphere(c, r, n);
             (0..m.triangles.len()).map(|k| m.triangle(k)).collect()

@@ -289,3 +289,55 @@ mod tests {
         assert!((t3.apply3(DVec3::X) - DVec3::new(1.0, 2.0, 0.0)).length() < 1e-15);
     }
 }
+
+/// A closed torus about the z axis (major radius `big_r`, minor `small_r`), `nu x nv` quads
+/// split into triangles, outward normals.
+pub fn torus_triangles(big_r: f64, small_r: f64, nu: usize, nv: usize) -> Vec<[DVec3; 3]> {
+    use std::f64::consts::TAU;
+    let p = |i: usize, j: usize| {
+        let (u, v) = (
+            TAU * (i % nu) as f64 / nu as f64,
+            TAU * (j % nv) as f64 / nv as f64,
+        );
+        DVec3::new(
+            (big_r + small_r * v.cos()) * u.cos(),
+            (big_r + small_r * v.cos()) * u.sin(),
+            small_r * v.sin(),
+        )
+    };
+    let mut out = Vec::with_capacity(2 * nu * nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+            out.push([a, b, c]);
+            out.push([a, c, d]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod torus_tests {
+    use super::*;
+
+    /// Rewrites `cases/shapes/torus.stl` (run with `--ignored`).
+    #[test]
+    #[ignore]
+    fn write_torus_stl() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/shapes/torus.stl");
+        write_stl_binary(&path, &torus_triangles(0.3, 0.12, 48, 24)).unwrap();
+    }
+
+    #[test]
+    fn torus_is_a_closed_mesh_with_a_hole() {
+        let tris = torus_triangles(0.3, 0.12, 48, 24);
+        let m = bisph_core::region::TriMesh::from_soup(&tris, 1e-9).unwrap();
+        let exact = 2.0 * std::f64::consts::PI.powi(2) * 0.3 * 0.12 * 0.12;
+        assert!((m.volume() - exact).abs() < 0.02 * exact);
+        assert!(m.contains(DVec3::new(0.3, 0.0, 0.0)));
+        assert!(!m.contains(DVec3::ZERO), "the hole of the torus is outside");
+        let dx = 0.02;
+        let filled = m.lattice(dx).len() as f64 * dx.powi(3);
+        assert!((filled - m.volume()).abs() < 0.05 * m.volume());
+    }
+}

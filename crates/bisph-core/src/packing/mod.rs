@@ -169,31 +169,33 @@ impl<V: WallIntegrals> PackWalls<V> {
             return s;
         }
         let support = kernel.support;
-        let mut x_eval = x;
+        // A point on a wall: the Shepard factor is the limit from the fluid side.
+        let mut on_wall = None;
         self.grid.for_each_candidate(x, |j| {
             if (e.centre[j] - x).length() >= support + e.reach[j] {
                 return;
             }
             let corners = e.current_corners(j);
             let d = V::element_distance(x, corners);
-            if d < s.distance {
-                s.distance = d;
-            }
+            s.distance = s.distance.min(d);
             if d >= support {
                 return;
             }
             s.truncated = true;
-            s.grad_gamma += integrals::element_grad_gamma(kernel, x, corners, e.normal[j], support);
+            if d <= 1e-9 * kernel.h {
+                on_wall = Some(e.normal[j]);
+            }
+            let (g, w) = V::element_gamma_and_integral(kernel, x, corners, e.normal[j]);
+            s.gamma += g;
+            s.grad_gamma -= e.normal[j] * w;
             if d < push_radius {
                 s.push +=
                     integrals::element_grad_gamma(kernel, x, corners, e.normal[j], push_radius);
             }
-            if d <= 1e-9 * kernel.h {
-                // On the wall: the Shepard factor is the limit from the fluid side.
-                x_eval -= e.normal[j] * (1e-9 * kernel.h);
-            }
         });
-        if s.truncated {
+        if let Some(n) = on_wall {
+            let x_eval = x - n * (1e-9 * kernel.h);
+            s.gamma = 1.0;
             self.grid.for_each_candidate(x_eval, |j| {
                 if (e.centre[j] - x_eval).length() < support + e.reach[j] {
                     s.gamma += V::element_gamma(kernel, x_eval, e.current_corners(j), e.normal[j]);
