@@ -1,9 +1,11 @@
 //! From a checked case to a ready [`Simulation`].
 
 use crate::case::ToleranceReference;
-use crate::case::{Case, FluidBlock, InitialPressure, LoadedCase, WallSpec};
+use crate::case::{Case, CaseError, FluidBlock, InitialPressure, LoadedCase, WallSpec};
+use crate::regions::BlockRegion;
 use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::{self, ElementShape};
+use bisph_core::packing::WallIntegrals;
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
@@ -12,7 +14,15 @@ use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wen
 use glam::{DVec2, DVec3};
 
 /// What differs between 2-D and 3-D when building a case.
-pub trait CaseDim: Vector {
+pub trait CaseDim: Vector + WallIntegrals {
+    /// The region of a block (shape minus holes, transformed) for spacing `dx`.
+    fn block_region(
+        loaded: &LoadedCase,
+        key: &str,
+        block: &FluidBlock,
+        dx: f64,
+        element_size: f64,
+    ) -> Result<BlockRegion<Self>, CaseError>;
     /// Boundary elements of one `[[wall]]` of about `size`.
     fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>>;
     /// Lattice points of one `[[fluid_block]]`.
@@ -28,6 +38,22 @@ fn points2(points: &Option<Vec<Vec<f64>>>) -> Vec<DVec2> {
 }
 
 impl CaseDim for DVec2 {
+    fn block_region(
+        loaded: &LoadedCase,
+        key: &str,
+        block: &FluidBlock,
+        dx: f64,
+        element_size: f64,
+    ) -> Result<BlockRegion<Self>, CaseError> {
+        crate::regions::region_2d(
+            loaded,
+            key,
+            &block.shape_spec(),
+            &block.hole,
+            dx,
+            element_size,
+        )
+    }
     fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
         match wall.shape.as_str() {
             "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
@@ -44,6 +70,22 @@ impl CaseDim for DVec2 {
 }
 
 impl CaseDim for DVec3 {
+    fn block_region(
+        loaded: &LoadedCase,
+        key: &str,
+        block: &FluidBlock,
+        dx: f64,
+        element_size: f64,
+    ) -> Result<BlockRegion<Self>, CaseError> {
+        crate::regions::region_3d(
+            loaded,
+            key,
+            &block.shape_spec(),
+            &block.hole,
+            dx,
+            element_size,
+        )
+    }
     fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
         geometry::box_elements_3d(vec3(&wall.min), vec3(&wall.max), &wall.open, size)
     }
@@ -77,10 +119,37 @@ pub fn eos_of(case: &Case) -> Eos {
     }
 }
 
-/// Builds the simulation of a checked case.
-pub fn build_simulation<V: CaseDim>(
+/// The initial particle positions of block `k`: read from a file (`shape = "particles"`),
+/// packed with BIPI (`fill = "bipi"`) or on the lattice.
+pub fn block_points<V: CaseDim>(
     loaded: &LoadedCase,
-) -> Result<Simulation<V>, crate::case::CaseError> {
+    k: usize,
+    dx: f64,
+) -> Result<Vec<V>, CaseError> {
+    let block = &loaded.case.fluid_block[k];
+    let key = format!("fluid_block[{k}]");
+    if block.shape == "particles" {
+        let file = block.file.clone().unwrap_or_default();
+        let rows = crate::shapes::read_particles(&loaded.resolve(&file), V::DIM)
+            .map_err(|m| loaded.error(&format!("{key}.file"), m))?;
+        return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
+    }
+    if block.bipi() {
+        let packed = crate::pack::pack_block::<V>(loaded, k, &mut |_| {})?;
+        return Ok(packed.packer.positions);
+    }
+    let plain = matches!(block.shape.as_str(), "box" | "polygon")
+        && block.hole.is_empty()
+        && crate::regions::transform_of(&block.shape_spec()).is_identity();
+    if plain {
+        return Ok(V::fill(block, dx));
+    }
+    let element_size = dx * loaded.case.resolution.element_over_dx;
+    Ok(V::block_region(loaded, &key, block, dx, element_size)?.lattice)
+}
+
+/// Builds the simulation of a checked case.
+pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, CaseError> {
     let case = &loaded.case;
     let dx = case.resolution.dx;
     let h = case.resolution.h_over_dx * dx;
@@ -204,7 +273,6 @@ pub fn build_simulation<V: CaseDim>(
     }
 
     let mut fluid = Fluid::default();
-    let mass = eos.rho0() * dx.powi(V::DIM as i32);
     let g = gravity.length();
     for (k, block) in case.fluid_block.iter().enumerate() {
         let key = format!("fluid_block[{k}]");
@@ -214,18 +282,37 @@ pub fn build_simulation<V: CaseDim>(
                 "a fluid block must be a closed \"box\" or \"polygon\"",
             ));
         }
-        let points = V::fill(block, dx);
+        if block.solid {
+            return Err(loaded.error(
+                &format!("{key}.solid"),
+                "solid blocks are packed by `bisph pack` only; `bisph run` moves fluid",
+            ));
+        }
+        let block_dx = block.dx.unwrap_or(dx);
+        let mass = eos.rho0() * block_dx.powi(V::DIM as i32);
+        let points = block_points::<V>(loaded, k, block_dx)?;
         if points.is_empty() {
             return Err(loaded.error(
                 &key,
-                format!("no lattice point of spacing dx = {dx} fits in this block"),
+                format!("no lattice point of spacing dx = {block_dx} fits in this block"),
             ));
         }
         let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
         let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
-        let surface = block
-            .surface
-            .unwrap_or_else(|| block_top(block, gravity, g));
+        let surface = block.surface.unwrap_or_else(|| {
+            if matches!(block.shape.as_str(), "box" | "polygon")
+                && crate::regions::transform_of(&block.shape_spec()).is_identity()
+            {
+                block_top(block, gravity, g)
+            } else {
+                // Shapes from files: the top particle plus half a spacing.
+                points
+                    .iter()
+                    .map(|&r| height(r))
+                    .fold(f64::NEG_INFINITY, f64::max)
+                    + 0.5 * block_dx
+            }
+        });
         let hydrostatic = match &block.pressure {
             None => g > 0.0,
             Some(InitialPressure::Named(_)) => true,

@@ -268,7 +268,8 @@ pub enum InitialPressure {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
-    /// `"box"` or `"polygon"` (2-D).
+    /// `"box"`, `"polygon"` (2-D), `"polygon_file"` (2-D), `"stl"` (3-D), `"sphere"` (3-D,
+    /// a generated closed mesh) or `"particles"` (positions from a CSV file).
     pub shape: String,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
@@ -276,6 +277,32 @@ pub struct FluidBlock {
     pub max: Option<Vec<f64>>,
     /// Polygon vertices.
     pub points: Option<Vec<Vec<f64>>>,
+    /// Geometry or particle file, relative to the case file's folder.
+    pub file: Option<String>,
+    /// Sphere centre.
+    pub centre: Option<Vec<f64>>,
+    /// Sphere radius.
+    pub radius: Option<f64>,
+    /// Sphere mesh refinement (icosahedron subdivisions; default: edges of about `dx`).
+    pub subdivisions: Option<u32>,
+    /// Length unit of the file or points: `"m"` (default), `"cm"` or `"mm"`.
+    pub units: Option<String>,
+    /// Uniform scale applied to the geometry (after units).
+    pub scale: Option<f64>,
+    /// Rotation in degrees (2-D: one angle; 3-D: about x, then y, then z), after scaling.
+    pub rotate: Option<Angles>,
+    /// Translation, applied last.
+    pub translate: Option<Vec<f64>>,
+    /// Regions cut out of the block (e.g. an airfoil in a box).
+    #[serde(default)]
+    pub hole: Vec<ShapeSpec>,
+    /// `"lattice"` (default) or `"bipi"`: pack the block with BIPI before running.
+    pub fill: Option<String>,
+    /// Particle spacing of this block (default `resolution.dx`).
+    pub dx: Option<f64>,
+    /// Particles of a solid body: packed by `bisph pack`, not run as fluid.
+    #[serde(default)]
+    pub solid: bool,
     /// Initial velocity.
     pub velocity: Option<Vec<f64>>,
     /// Initial pressure (default: hydrostatic under gravity, else zero).
@@ -313,6 +340,97 @@ pub enum MassRule {
     Reference,
     /// `rho_i dx^d` with the initial density.
     Initial,
+}
+
+/// Rotation angles in degrees: one number (2-D) or a list.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Angles {
+    /// One angle.
+    One(f64),
+    /// Angles about x, y, z (3-D) or a one-element list (2-D).
+    Many(Vec<f64>),
+}
+
+/// `[[fluid_block.hole]]`: a shape, as in a fluid block.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// `"box"`, `"polygon"`, `"polygon_file"`, `"stl"` or `"sphere"`.
+    pub shape: String,
+    /// Box lower corner.
+    pub min: Option<Vec<f64>>,
+    /// Box upper corner.
+    pub max: Option<Vec<f64>>,
+    /// Polygon vertices.
+    pub points: Option<Vec<Vec<f64>>>,
+    /// Geometry file, relative to the case file's folder.
+    pub file: Option<String>,
+    /// Sphere centre.
+    pub centre: Option<Vec<f64>>,
+    /// Sphere radius.
+    pub radius: Option<f64>,
+    /// Sphere mesh refinement.
+    pub subdivisions: Option<u32>,
+    /// `"m"`, `"cm"` or `"mm"`.
+    pub units: Option<String>,
+    /// Uniform scale.
+    pub scale: Option<f64>,
+    /// Rotation in degrees.
+    pub rotate: Option<Angles>,
+    /// Translation.
+    pub translate: Option<Vec<f64>>,
+}
+
+impl FluidBlock {
+    /// The block's own shape (without its holes).
+    pub fn shape_spec(&self) -> ShapeSpec {
+        ShapeSpec {
+            shape: self.shape.clone(),
+            min: self.min.clone(),
+            max: self.max.clone(),
+            points: self.points.clone(),
+            file: self.file.clone(),
+            centre: self.centre.clone(),
+            radius: self.radius,
+            subdivisions: self.subdivisions,
+            units: self.units.clone(),
+            scale: self.scale,
+            rotate: self.rotate.clone(),
+            translate: self.translate.clone(),
+        }
+    }
+
+    /// `true` when the block asks to be packed with BIPI.
+    pub fn bipi(&self) -> bool {
+        self.fill.as_deref() == Some("bipi")
+    }
+}
+
+/// `[pack]`: BIPI parameters (paper 4); lengths in units of the block's `dx`.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PackSection {
+    /// `D / h^2` of the shift (0.5).
+    pub diffusion: Option<f64>,
+    /// Largest shift per iteration (0.25).
+    pub max_shift: Option<f64>,
+    /// Radius of the boundary push (0.5).
+    pub push_radius: Option<f64>,
+    /// Most iterations of stage 2a (10000).
+    pub stage_a_max: Option<usize>,
+    /// TPD plateau window (100 iterations).
+    pub plateau_window: Option<usize>,
+    /// TPD plateau relative change (0.01).
+    pub plateau_tolerance: Option<f64>,
+    /// Stage 2b freezes particles closer than this to a wall (0.6).
+    pub freeze_distance: Option<f64>,
+    /// Iterations of stage 2c (1000).
+    pub stage_c_iterations: Option<usize>,
+    /// Early stop of stage 2c on mean |grad C| (0: off).
+    pub stage_c_tolerance: Option<f64>,
+    /// Metrics over all particles every this many iterations in stage 2a (10).
+    pub report_interval: Option<usize>,
 }
 
 /// `[[wall]]`.
@@ -459,6 +577,9 @@ pub struct Case {
     /// Probes.
     #[serde(default)]
     pub probe: Vec<ProbeSpec>,
+    /// BIPI packing parameters.
+    #[serde(default)]
+    pub pack: PackSection,
 }
 
 /// The built-in default case: the 2-D dam break (`cases/dam-break-2d.toml`).
@@ -476,6 +597,18 @@ pub struct LoadedCase {
 }
 
 impl LoadedCase {
+    /// A path named in the case, resolved against the case file's folder.
+    pub fn resolve(&self, file: &str) -> PathBuf {
+        let p = Path::new(file);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        match Path::new(&self.source).parent() {
+            Some(dir) if !self.source.starts_with('<') => dir.join(p),
+            _ => p.to_path_buf(),
+        }
+    }
+
     /// A key error for this case.
     pub fn error(&self, key: &str, message: impl Into<String>) -> CaseError {
         CaseError {
@@ -733,7 +866,34 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, b) in c.fluid_block.iter().enumerate() {
         let key = format!("fluid_block[{k}]");
-        shape_points(loaded, &key, &b.shape, &b.min, &b.max, &b.points, d)?;
+        check_shape(loaded, &key, &b.shape_spec(), d, true)?;
+        for (m, hole) in b.hole.iter().enumerate() {
+            let hkey = format!("{key}.hole[{m}]");
+            if hole.shape == "particles" {
+                return e(
+                    &format!("{hkey}.shape"),
+                    "a hole must be a shape, not \"particles\"".into(),
+                );
+            }
+            check_shape(loaded, &hkey, hole, d, false)?;
+        }
+        if let Some(fill) = &b.fill {
+            if fill != "lattice" && fill != "bipi" {
+                return e(
+                    &format!("{key}.fill"),
+                    format!("expected \"lattice\" or \"bipi\", found \"{fill}\""),
+                );
+            }
+            if fill == "bipi" && b.shape == "particles" {
+                return e(
+                    &format!("{key}.fill"),
+                    "a \"particles\" block is already placed; it cannot be packed".into(),
+                );
+            }
+        }
+        if let Some(dx) = b.dx {
+            positive(&format!("{key}.dx"), dx)?;
+        }
         if let Some(v) = &b.velocity {
             vector(loaded, &format!("{key}.velocity"), v, d)?;
         }
@@ -845,6 +1005,7 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             return e("resolution.dx", "dx is larger than the domain".into());
         }
     }
+    check_pack(loaded)?;
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
@@ -923,6 +1084,164 @@ fn shape_points(
             ))
         }
     }
+}
+
+/// Checks one shape of a fluid block or hole (`particles` allowed for blocks only).
+fn check_shape(
+    loaded: &LoadedCase,
+    key: &str,
+    s: &ShapeSpec,
+    d: usize,
+    allow_particles: bool,
+) -> Result<(), CaseError> {
+    let e = |k: &str, msg: String| Err(loaded.error(k, msg));
+    match s.shape.as_str() {
+        "box" | "polygon" | "polyline" => {
+            shape_points(loaded, key, &s.shape, &s.min, &s.max, &s.points, d)?
+        }
+        "polygon_file" | "stl" | "particles" => {
+            let needed_dim = match s.shape.as_str() {
+                "polygon_file" => Some(2),
+                "stl" => Some(3),
+                _ => None,
+            };
+            if let Some(nd) = needed_dim {
+                if nd != d {
+                    return e(
+                        &format!("{key}.shape"),
+                        format!("\"{}\" is a {nd}-D shape, but the case is {d}-D", s.shape),
+                    );
+                }
+            }
+            if s.shape == "particles" && !allow_particles {
+                return e(&format!("{key}.shape"), "expected a shape".into());
+            }
+            match &s.file {
+                Some(f) if !f.trim().is_empty() => {}
+                _ => {
+                    return e(
+                        &format!("{key}.file"),
+                        format!("missing: shape \"{}\" reads its data from a file", s.shape),
+                    )
+                }
+            }
+        }
+        "sphere" if d == 3 => {
+            let Some(c) = &s.centre else {
+                return e(
+                    &format!("{key}.centre"),
+                    "missing: a sphere needs `centre`".into(),
+                );
+            };
+            vector(loaded, &format!("{key}.centre"), c, 3)?;
+            match s.radius {
+                Some(r) if r > 0.0 && r.is_finite() => {}
+                other => {
+                    return e(
+                        &format!("{key}.radius"),
+                        format!("expected a positive radius, found {other:?}"),
+                    )
+                }
+            }
+            if let Some(n) = s.subdivisions {
+                if n > 8 {
+                    return e(
+                        &format!("{key}.subdivisions"),
+                        format!("expected at most 8 (20 * 4^8 triangles), found {n}"),
+                    );
+                }
+            }
+        }
+        other => {
+            let allowed = if d == 2 {
+                "\"box\", \"polygon\", \"polygon_file\" or \"particles\""
+            } else {
+                "\"box\", \"stl\", \"sphere\" or \"particles\""
+            };
+            return e(
+                &format!("{key}.shape"),
+                format!("expected {allowed} in {d}-D, found \"{other}\""),
+            );
+        }
+    }
+    if let Some(u) = &s.units {
+        if unit_factor(u).is_none() {
+            return e(
+                &format!("{key}.units"),
+                format!("expected \"m\", \"cm\" or \"mm\", found \"{u}\""),
+            );
+        }
+    }
+    if let Some(sc) = s.scale {
+        if !(sc > 0.0 && sc.is_finite()) {
+            return e(
+                &format!("{key}.scale"),
+                format!("expected a positive number, found {sc}"),
+            );
+        }
+    }
+    if let Some(t) = &s.translate {
+        vector(loaded, &format!("{key}.translate"), t, d)?;
+    }
+    if let Some(r) = &s.rotate {
+        let n = match r {
+            Angles::One(a) => {
+                if !a.is_finite() {
+                    return e(&format!("{key}.rotate"), "expected finite angles".into());
+                }
+                1
+            }
+            Angles::Many(v) => {
+                vector(loaded, &format!("{key}.rotate"), v, v.len())?;
+                v.len()
+            }
+        };
+        let want = if d == 2 { 1 } else { 3 };
+        if n != want {
+            return e(
+                &format!("{key}.rotate"),
+                format!("expected {want} angle(s) in degrees in {d}-D, found {n}"),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Metres per unit: `"m"`, `"cm"`, `"mm"`.
+pub fn unit_factor(units: &str) -> Option<f64> {
+    match units {
+        "m" => Some(1.0),
+        "cm" => Some(0.01),
+        "mm" => Some(0.001),
+        _ => None,
+    }
+}
+
+/// Checks the `[pack]` table.
+fn check_pack(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let p = &loaded.case.pack;
+    let range = |key: &str, v: Option<f64>, lo: f64, hi: f64| -> Result<(), CaseError> {
+        match v {
+            Some(x) if !(x >= lo && x <= hi) => Err(loaded.error(
+                &format!("pack.{key}"),
+                format!("expected a value in [{lo}, {hi}], found {x}"),
+            )),
+            _ => Ok(()),
+        }
+    };
+    range("diffusion", p.diffusion, 1e-6, 10.0)?;
+    range("max_shift", p.max_shift, 1e-6, 1.0)?;
+    range("push_radius", p.push_radius, 0.0, 2.0)?;
+    range("plateau_tolerance", p.plateau_tolerance, 0.0, 1.0)?;
+    range("freeze_distance", p.freeze_distance, 0.0, 4.0)?;
+    range("stage_c_tolerance", p.stage_c_tolerance, 0.0, 1.0)?;
+    if p.plateau_window == Some(0) {
+        return Err(loaded.error("pack.plateau_window", "expected at least 1 iteration"));
+    }
+    if p.report_interval == Some(0) {
+        return Err(loaded.error("pack.report_interval", "expected at least 1 iteration"));
+    }
+    Ok(())
 }
 
 /// Where a run writes by default: `out/<case name>`.

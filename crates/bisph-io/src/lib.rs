@@ -7,10 +7,14 @@
 pub mod build;
 pub mod case;
 pub mod output;
+pub mod pack;
+pub mod pack_cases;
 pub mod paper1_cases;
 pub mod paper2_cases;
 pub mod plot;
+pub mod regions;
 pub mod runner;
+pub mod shapes;
 pub mod shepard;
 pub mod validate;
 pub mod vtk;

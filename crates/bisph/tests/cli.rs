@@ -547,3 +547,114 @@ fn shepard_prints_gamma_and_names_bad_points() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented"));
 }
+
+const PACK: &str = r#"
+name = "p"
+dim = 2
+[fluid]
+density = 1000.0
+sound_speed = 20.0
+gravity = [0.0, -9.81]
+[resolution]
+dx = 0.05
+[time]
+end = 0.01
+[pack]
+stage_a_max = 300
+stage_c_iterations = 60
+[[fluid_block]]
+shape = "polygon"
+points = [[0.0, 0.0], [1.0, 0.3], [0.8, 0.9], [-0.1, 0.6]]
+fill = "bipi"
+[[fluid_block.hole]]
+shape = "polygon"
+points = [[0.45, 0.3], [0.6, 0.45], [0.45, 0.6], [0.3, 0.45]]
+[[wall]]
+shape = "polygon"
+points = [[0.0, 0.0], [1.0, 0.3], [0.8, 0.9], [-0.1, 0.6]]
+[[wall]]
+shape = "polygon"
+points = [[0.45, 0.3], [0.3, 0.45], [0.45, 0.6], [0.6, 0.45]]
+"#;
+
+/// `bisph pack` writes the contract's outputs, keeps every particle inside, and its
+/// `packed.toml` runs; `bisph run` packs a `fill = "bipi"` block itself.
+#[test]
+fn pack_writes_outputs_and_its_packed_case_runs() {
+    let dir = temp_dir("pack");
+    let case = dir.join("p.toml");
+    std::fs::write(&case, PACK).unwrap();
+    let out = dir.join("out");
+    let o = bisph(&[
+        "pack",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("pack.csv")).unwrap();
+    assert!(csv.starts_with("iteration,kinetic,tpd,gradc_mean,gradc_max,"));
+    assert!(csv.lines().count() > 60);
+    for f in [
+        "particles.vtu",
+        "lattice.vtu",
+        "walls.vtu",
+        "particles-0.csv",
+        "pack-0-gradc.png",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let b = &s["blocks"][0];
+    assert_eq!(b["outside"], 0);
+    let layer = b["first_layer"]["mean"].as_f64().unwrap();
+    assert!((layer - 0.5).abs() < 0.05, "first layer at {layer} dx");
+    let before = b["gradc_mean_all"][0].as_f64().unwrap();
+    let after = b["gradc_mean_all"][1].as_f64().unwrap();
+    assert!(after < 0.5 * before, "{before} -> {after}");
+    let run_out = dir.join("run");
+    let o = bisph(&[
+        "run",
+        out.join("packed.toml").to_str().unwrap(),
+        "--out",
+        run_out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary(&run_out)["fluid_particles"], b["particles"]);
+}
+
+/// Bad geometry in a pack case is a named error, not a panic.
+#[test]
+fn pack_errors_name_the_key() {
+    let dir = temp_dir("pack-errors");
+    let cases = [
+        (
+            PACK.replace("shape = \"polygon\"\npoints = [[0.0, 0.0], [1.0, 0.3], [0.8, 0.9], [-0.1, 0.6]]\nfill", "shape = \"polygon_file\"\nfile = \"missing.csv\"\nfill"),
+            "fluid_block[0].file",
+        ),
+        (
+            PACK.replace("[0.8, 0.9], [-0.1, 0.6]]\nfill", "[0.0, 0.6], [1.0, 0.6]]\nfill"),
+            "intersects itself",
+        ),
+        (PACK.replace("stage_c_iterations = 60", "max_shift = 3.0"), "pack.max_shift"),
+        (PACK.replace("[0.45, 0.3], [0.6, 0.45]", "[0.45, -0.3], [0.6, 0.45]"), "hole"),
+    ];
+    for (k, (text, expected)) in cases.iter().enumerate() {
+        let case = dir.join(format!("bad{k}.toml"));
+        std::fs::write(&case, text).unwrap();
+        let o = bisph(&[
+            "pack",
+            case.to_str().unwrap(),
+            "--out",
+            dir.join("o").to_str().unwrap(),
+            "--quiet",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "case {k}: {err}");
+        assert!(err.contains(expected), "case {k}: {err}");
+        assert!(!err.contains("panicked"), "case {k}: {err}");
+    }
+}

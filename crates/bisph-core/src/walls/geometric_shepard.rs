@@ -25,7 +25,7 @@ use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
 /// `int_0^u (a^2 + t^2)^(k/2) dt` for `k = 0, 2, 3, 4, 5`, as `[I0, I2, I3, I4, I5]`.
-fn radial_moments(a: f64, u: f64) -> [f64; 5] {
+pub(crate) fn radial_moments(a: f64, u: f64) -> [f64; 5] {
     let (a2, u2) = (a * a, u * u);
     let rho = (a2 + u2).sqrt();
     let log_term = if a == 0.0 { 0.0 } else { (u / a.abs()).asinh() };

@@ -1,0 +1,650 @@
+//! BIPI: boundary-integral based particle initialisation (paper 4, Boregowda & Liu).
+//!
+//! Step 1 (a lattice inside the region) is done by [`crate::region`]; this module does
+//! step 2, shifting particles down the concentration gradient with the boundary term:
+//!
+//! * `<C_a> = sum_b V_b W_ab / gamma_a` (paper 4, eq 4) and
+//!   `<grad C_a> = (sum_b V_b grad_a W_ab - sum_s grad gamma_as) / gamma_a` (eq 5), with the
+//!   exact Shepard factor `gamma_a` and exact element integrals `grad gamma_as`
+//!   ([`integrals`]);
+//! * the shift `dx_a = -D (grad C_a - B_a)` with `D = 0.5 h^2` and the boundary push
+//!   `B_a = sum_s grad gamma_as(r_push) / (2 gamma_a)` (eq 14 with `p_s = 2 p_a`), where the
+//!   push integrates only the part of the wall within `r_push = dx/2` of the particle: the
+//!   "ramp" of paper 4's fig 3c, as the authors' code does with short edges (a ramp that is
+//!   zero at `dx/2` from the wall and grows as the particle approaches it);
+//! * the shift capped at `0.25 dx` (eq 15);
+//! * stages: 2a moves only particles whose kernel is truncated (`gamma < 1`) until the total
+//!   particle displacement (TPD) plateaus; 2b freezes the particles next to the wall (within
+//!   `0.6 dx`); 2c moves all others for a fixed number of iterations (1000 by default).
+//!
+//! A particle never crosses a wall: a shift whose path touches an element is halved until it
+//! does not (or dropped). Sums gather per particle, so results do not depend on threads.
+
+pub mod integrals;
+
+use crate::dim::Vector;
+use crate::geometry::ElementShape;
+use crate::kernel::Wendland;
+use crate::neighbours::CellGrid;
+use crate::walls::BoundaryElements;
+pub use integrals::WallIntegrals;
+use rayon::prelude::*;
+
+/// Parameters of BIPI; lengths in units of `dx` unless said otherwise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackParams {
+    /// Lattice spacing `dx` [m].
+    pub dx: f64,
+    /// Smoothing length `h` [m] (support `2h`).
+    pub h: f64,
+    /// Mass of one particle (for the kinetic energy of the shifts only).
+    pub mass: f64,
+    /// `D / h^2` in the shift `-D grad C` (paper 4: 0.5).
+    pub diffusion: f64,
+    /// Largest shift per iteration, in `dx` (paper 4, eq 15: 0.25).
+    pub max_shift: f64,
+    /// Radius of the boundary push, in `dx` (0.5: the particle radius).
+    pub push_radius: f64,
+    /// Most iterations of stage 2a.
+    pub stage_a_max: usize,
+    /// TPD plateau test of stage 2a: window in iterations...
+    pub plateau_window: usize,
+    /// ...and relative change of TPD over the window below which it has plateaued.
+    pub plateau_tolerance: f64,
+    /// Stage 2b freezes particles closer than this to a wall, in `dx`.
+    pub freeze_distance: f64,
+    /// Iterations of stage 2c.
+    pub stage_c_iterations: usize,
+    /// Stage 2c stops early when mean `|grad C|` changes by less than this relative amount
+    /// over `plateau_window` iterations (0: never).
+    pub stage_c_tolerance: f64,
+    /// Evaluate the metrics over all particles every this many iterations during stage 2a
+    /// (default 10; in between only particles near a wall are evaluated, and the metrics are
+    /// NaN). Stage 2c evaluates everyone anyway.
+    pub report_interval: usize,
+}
+
+impl PackParams {
+    /// The paper's defaults for spacing `dx` and smoothing length `h`.
+    pub fn new(dx: f64, h: f64) -> Self {
+        PackParams {
+            dx,
+            h,
+            mass: 1.0,
+            diffusion: 0.5,
+            max_shift: 0.25,
+            push_radius: 0.5,
+            stage_a_max: 10_000,
+            plateau_window: 100,
+            plateau_tolerance: 0.01,
+            freeze_distance: 0.6,
+            stage_c_iterations: 1000,
+            stage_c_tolerance: 0.0,
+            report_interval: 10,
+        }
+    }
+}
+
+/// The stage an iteration belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The lattice before any shift (iteration 0).
+    Start,
+    /// 2a: particles with truncated kernels only.
+    A,
+    /// 2c: all particles but the frozen first layer.
+    C,
+}
+
+/// Metrics of one iteration (one row of `pack.csv`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IterationStats {
+    /// Iteration number (0: the lattice).
+    pub iteration: usize,
+    /// Stage.
+    pub stage: Stage,
+    /// `1/2 sum m |dx_a|^2`: kinetic energy of the shifts, taken as velocities per iteration.
+    pub kinetic: f64,
+    /// Total particle displacement from the start, `sum |x_a - x_a^0|` [m].
+    pub tpd: f64,
+    /// Mean `|grad C|` over particles with `gamma = 1` (NaN when not evaluated).
+    pub gradc_mean: f64,
+    /// Largest `|grad C|` over particles with `gamma = 1`.
+    pub gradc_max: f64,
+    /// Mean `|grad C|` over all particles.
+    pub gradc_mean_all: f64,
+    /// Largest `|grad C|` over all particles.
+    pub gradc_max_all: f64,
+    /// Particles moved in this iteration.
+    pub moved: usize,
+}
+
+/// Wall quantities at a point.
+#[derive(Clone, Copy, Debug)]
+pub struct WallSample<V> {
+    /// Shepard factor `gamma` (paper 2).
+    pub gamma: f64,
+    /// `sum_s grad gamma_as` (into the fluid).
+    pub grad_gamma: V,
+    /// `sum_s grad gamma_as` over the wall within the push radius.
+    pub push: V,
+    /// Distance to the nearest element (infinite when none is within the support).
+    pub distance: f64,
+    /// Some element lies within the support.
+    pub truncated: bool,
+}
+
+/// Walls for packing: elements (normals out of the region) and a grid over them.
+#[derive(Clone, Debug)]
+pub struct PackWalls<V: Vector> {
+    /// The elements.
+    pub elements: BoundaryElements<V>,
+    grid: CellGrid<V>,
+}
+
+impl<V: WallIntegrals> PackWalls<V> {
+    /// Walls from element shapes, for a kernel of support `support`.
+    pub fn new(shapes: &[ElementShape<V>], support: f64) -> Self {
+        let mut elements = BoundaryElements::default();
+        for s in shapes {
+            elements.push(s.centre, s.normal, s.area, 0, &s.corners);
+        }
+        let reach = elements.reach.iter().copied().fold(0.0, f64::max);
+        let mut grid = CellGrid::new(support + reach);
+        grid.rebuild(&elements.centre);
+        PackWalls { elements, grid }
+    }
+
+    /// Exact wall quantities at `x` (paper 4, eqs 3-5; paper 2, eq 8).
+    pub fn sample(&self, kernel: &Wendland, x: V, push_radius: f64) -> WallSample<V> {
+        let e = &self.elements;
+        let mut s = WallSample {
+            gamma: 1.0,
+            grad_gamma: V::ZERO,
+            push: V::ZERO,
+            distance: f64::INFINITY,
+            truncated: false,
+        };
+        if e.is_empty() {
+            return s;
+        }
+        let support = kernel.support;
+        // A point on a wall: the Shepard factor is the limit from the fluid side.
+        let mut on_wall = None;
+        self.grid.for_each_candidate(x, |j| {
+            if (e.centre[j] - x).length() >= support + e.reach[j] {
+                return;
+            }
+            let corners = e.current_corners(j);
+            let d = V::element_distance(x, corners);
+            s.distance = s.distance.min(d);
+            if d >= support {
+                return;
+            }
+            s.truncated = true;
+            if d <= 1e-9 * kernel.h {
+                on_wall = Some(e.normal[j]);
+            }
+            let (g, w) = V::element_gamma_and_integral(kernel, x, corners, e.normal[j]);
+            s.gamma += g;
+            s.grad_gamma -= e.normal[j] * w;
+            if d < push_radius {
+                s.push +=
+                    integrals::element_grad_gamma(kernel, x, corners, e.normal[j], push_radius);
+            }
+        });
+        if let Some(n) = on_wall {
+            let x_eval = x - n * (1e-9 * kernel.h);
+            s.gamma = 1.0;
+            self.grid.for_each_candidate(x_eval, |j| {
+                if (e.centre[j] - x_eval).length() < support + e.reach[j] {
+                    s.gamma += V::element_gamma(kernel, x_eval, e.current_corners(j), e.normal[j]);
+                }
+            });
+        }
+        s
+    }
+
+    /// `true` when the straight path from `from` to `to` touches an element.
+    pub fn path_crosses(&self, from: V, to: V) -> bool {
+        let e = &self.elements;
+        let span = (to - from).length();
+        let mut hit = false;
+        self.grid.for_each_candidate(from, |j| {
+            if !hit
+                && (e.centre[j] - from).length() <= span + e.reach[j]
+                && V::path_crosses_element(from, to, e.current_corners(j))
+            {
+                hit = true;
+            }
+        });
+        hit
+    }
+
+    /// Distance from `x` to the nearest element within reach of the grid (infinite if none).
+    pub fn distance(&self, x: V) -> f64 {
+        let e = &self.elements;
+        let mut d = f64::INFINITY;
+        self.grid.for_each_candidate(x, |j| {
+            d = d.min(V::element_distance(x, e.current_corners(j)));
+        });
+        d
+    }
+}
+
+/// Per-particle result of one evaluation.
+#[derive(Clone, Copy, Debug)]
+struct Evaluation<V> {
+    gradc: V,
+    shift: V,
+    truncated: bool,
+    distance: f64,
+}
+
+/// The state of a BIPI run.
+#[derive(Debug)]
+pub struct Packer<V: WallIntegrals> {
+    /// Parameters.
+    pub params: PackParams,
+    /// Kernel.
+    pub kernel: Wendland,
+    /// Walls.
+    pub walls: PackWalls<V>,
+    /// Current positions.
+    pub positions: Vec<V>,
+    /// Lattice positions (start of step 2).
+    pub start: Vec<V>,
+    /// Particles frozen in stage 2b.
+    pub frozen: Vec<bool>,
+    volume: f64,
+    grid: CellGrid<V>,
+    iteration: usize,
+}
+
+/// Why packing could not start.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PackError {
+    /// No particle to pack.
+    #[error("no particle to pack: no lattice point of spacing {dx} lies inside the region")]
+    NoParticles {
+        /// The spacing.
+        dx: f64,
+    },
+    /// A parameter is out of range.
+    #[error("pack parameter `{name}` = {value}: {expected}")]
+    BadParameter {
+        /// Name.
+        name: &'static str,
+        /// Value.
+        value: f64,
+        /// What was expected.
+        expected: &'static str,
+    },
+}
+
+impl<V: WallIntegrals> Packer<V> {
+    /// A packer for the lattice `positions` bounded by `walls` (normals out of the region).
+    pub fn new(
+        params: PackParams,
+        positions: Vec<V>,
+        walls: PackWalls<V>,
+    ) -> Result<Self, PackError> {
+        let check = |name: &'static str, value: f64, ok: bool, expected: &'static str| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(PackError::BadParameter {
+                    name,
+                    value,
+                    expected,
+                })
+            }
+        };
+        check(
+            "dx",
+            params.dx,
+            params.dx > 0.0,
+            "expected a positive length",
+        )?;
+        check("h", params.h, params.h > 0.0, "expected a positive length")?;
+        check(
+            "diffusion",
+            params.diffusion,
+            params.diffusion > 0.0,
+            "expected a positive number",
+        )?;
+        check(
+            "max_shift",
+            params.max_shift,
+            params.max_shift > 0.0 && params.max_shift <= 1.0,
+            "expected a value in (0, 1]",
+        )?;
+        check(
+            "push_radius",
+            params.push_radius,
+            params.push_radius >= 0.0 && params.push_radius * params.dx <= 2.0 * params.h,
+            "expected a value in [0, 2h/dx]",
+        )?;
+        check(
+            "freeze_distance",
+            params.freeze_distance,
+            params.freeze_distance >= 0.0,
+            "expected zero or a positive number",
+        )?;
+        check(
+            "plateau_tolerance",
+            params.plateau_tolerance,
+            params.plateau_tolerance >= 0.0,
+            "expected zero or a positive number",
+        )?;
+        check(
+            "stage_c_tolerance",
+            params.stage_c_tolerance,
+            params.stage_c_tolerance >= 0.0,
+            "expected zero or a positive number",
+        )?;
+        if positions.is_empty() {
+            return Err(PackError::NoParticles { dx: params.dx });
+        }
+        let kernel = Wendland::for_dim::<V>(params.h);
+        let n = positions.len();
+        Ok(Packer {
+            volume: params.dx.powi(V::DIM as i32),
+            grid: CellGrid::new(kernel.support),
+            kernel,
+            walls,
+            start: positions.clone(),
+            positions,
+            frozen: vec![false; n],
+            params,
+            iteration: 0,
+        })
+    }
+
+    /// Particle volume `V_b = dx^d`.
+    pub fn volume(&self) -> f64 {
+        self.volume
+    }
+
+    /// Evaluates `grad C` and the capped shift (paper 4, eqs 5, 14, 15) of the particles
+    /// selected by `select` (others: `None`).
+    fn evaluate(&mut self, select: impl Fn(usize) -> bool + Sync) -> Vec<Option<Evaluation<V>>> {
+        self.grid.rebuild(&self.positions);
+        let (kernel, walls, grid, pos) = (&self.kernel, &self.walls, &self.grid, &self.positions);
+        let p = &self.params;
+        let volume = self.volume;
+        let d_coef = p.diffusion * p.h * p.h;
+        let cap = p.max_shift * p.dx;
+        let push_radius = p.push_radius * p.dx;
+        (0..pos.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|i| {
+                if !select(i) {
+                    return None;
+                }
+                let x = pos[i];
+                let w = walls.sample(kernel, x, push_radius);
+                let mut sum = V::ZERO;
+                grid.for_each_neighbour(x, pos, kernel.support, |_, r, _| {
+                    // grad_a W_ab = grad W(x_a - x_b) = -grad W(r), r = x_b - x_a
+                    sum -= kernel.gradient(r) * volume;
+                });
+                let gradc = (sum - w.grad_gamma) / w.gamma;
+                let mut shift = -(gradc - w.push / (2.0 * w.gamma)) * d_coef;
+                let len = shift.length();
+                if len > cap {
+                    shift = shift * (cap / len);
+                }
+                Some(Evaluation {
+                    gradc,
+                    shift,
+                    truncated: w.truncated,
+                    distance: w.distance,
+                })
+            })
+            .collect()
+    }
+
+    /// One shifting iteration in `stage`; returns its metrics. `full` evaluates `grad C`
+    /// for every particle (for the metrics), otherwise only for those that may move.
+    fn iterate(&mut self, stage: Stage, full: bool) -> IterationStats {
+        let walls_present = !self.walls.elements.is_empty();
+        // In stage 2a only truncated particles move; those are within the support of a wall.
+        let near: Vec<bool> = if stage == Stage::A && !full {
+            let kernel = self.kernel;
+            self.positions
+                .par_iter()
+                .map(|&x| walls_present && self.walls.distance(x) < kernel.support)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let evals = self.evaluate(|i| full || stage != Stage::A || near[i]);
+        let mut stats = IterationStats {
+            iteration: self.iteration,
+            stage,
+            kinetic: 0.0,
+            tpd: 0.0,
+            gradc_mean: f64::NAN,
+            gradc_max: f64::NAN,
+            gradc_mean_all: f64::NAN,
+            gradc_max_all: f64::NAN,
+            moved: 0,
+        };
+        if full {
+            metrics(&evals, &mut stats);
+        }
+        if stage != Stage::Start {
+            let walls = &self.walls;
+            let frozen = &self.frozen;
+            let moves: Vec<Option<V>> = evals
+                .par_iter()
+                .zip(self.positions.par_iter())
+                .enumerate()
+                .map(|(i, (e, &x))| {
+                    let e = e.as_ref()?;
+                    let movable = !frozen[i] && (stage == Stage::C || e.truncated);
+                    if !movable {
+                        return None;
+                    }
+                    let mut shift = e.shift;
+                    // Never cross a wall: halve the shift until the path is clear.
+                    if e.distance < walls_reach(e.shift) {
+                        for _ in 0..8 {
+                            if !walls.path_crosses(x, x + shift) {
+                                return Some(shift);
+                            }
+                            shift = shift * 0.5;
+                        }
+                        return None;
+                    }
+                    Some(shift)
+                })
+                .collect();
+            for (i, m) in moves.iter().enumerate() {
+                if let Some(s) = m {
+                    self.positions[i] += *s;
+                    stats.kinetic += 0.5 * self.params.mass * s.length_squared();
+                    stats.moved += 1;
+                }
+            }
+        }
+        stats.tpd = self
+            .positions
+            .iter()
+            .zip(&self.start)
+            .map(|(&a, &b)| (a - b).length())
+            .sum();
+        stats
+    }
+
+    /// Runs stages 2a, 2b and 2c, calling `observe` with the metrics of the lattice and of
+    /// every iteration; returns the metrics of all iterations.
+    pub fn run(&mut self, mut observe: impl FnMut(&IterationStats)) -> Vec<IterationStats> {
+        let mut history = Vec::new();
+        let first = self.iterate(Stage::Start, true);
+        observe(&first);
+        history.push(first);
+        let p = self.params.clone();
+        let has_walls = !self.walls.elements.is_empty();
+        // Stage 2a.
+        if has_walls {
+            let mut tpd: Vec<f64> = Vec::new();
+            for k in 1..=p.stage_a_max {
+                self.iteration += 1;
+                let full = p.report_interval > 0 && k % p.report_interval.max(1) == 0;
+                let s = self.iterate(Stage::A, full);
+                observe(&s);
+                tpd.push(s.tpd);
+                history.push(s);
+                if k > p.plateau_window {
+                    let (now, then) = (tpd[k - 1], tpd[k - 1 - p.plateau_window]);
+                    if (now - then).abs() <= p.plateau_tolerance * now.abs() {
+                        break;
+                    }
+                }
+                if s.moved == 0 {
+                    break;
+                }
+            }
+        }
+        // Stage 2b: freeze the layer next to the wall.
+        if has_walls {
+            let freeze = p.freeze_distance * p.dx;
+            let walls = &self.walls;
+            self.frozen = self
+                .positions
+                .par_iter()
+                .map(|&x| walls.distance(x) < freeze)
+                .collect();
+        }
+        // Stage 2c.
+        let mut means: Vec<f64> = Vec::new();
+        for k in 1..=p.stage_c_iterations {
+            self.iteration += 1;
+            let s = self.iterate(Stage::C, true);
+            observe(&s);
+            means.push(s.gradc_mean_all);
+            history.push(s);
+            if p.stage_c_tolerance > 0.0 && k > p.plateau_window {
+                let (now, then) = (means[k - 1], means[k - 1 - p.plateau_window]);
+                if (now - then).abs() <= p.stage_c_tolerance * now.abs() {
+                    break;
+                }
+            }
+        }
+        // Final metrics at the packed positions.
+        let mut last = self.iterate(Stage::Start, true);
+        last.iteration = self.iteration + 1;
+        last.stage = Stage::C;
+        last.tpd = history.last().map_or(0.0, |s| s.tpd);
+        observe(&last);
+        history.push(last);
+        history
+    }
+
+    /// Distance of every particle to the nearest wall (infinite beyond the element grid).
+    pub fn wall_distances(&self) -> Vec<f64> {
+        self.positions
+            .par_iter()
+            .map(|&x| self.walls.distance(x))
+            .collect()
+    }
+
+    /// `|grad C|` of every particle at the current positions, and whether its kernel is
+    /// truncated by a wall.
+    pub fn gradc_magnitudes(&mut self) -> Vec<(f64, bool)> {
+        self.evaluate(|_| true)
+            .into_iter()
+            .map(|e| e.map_or((f64::NAN, false), |e| (e.gradc.length(), e.truncated)))
+            .collect()
+    }
+}
+
+/// How close to a wall a particle must be for its shift to need the crossing test.
+fn walls_reach<V: Vector>(shift: V) -> f64 {
+    shift.length() * (1.0 + 1e-9) + 1e-300
+}
+
+fn metrics<V: Vector>(evals: &[Option<Evaluation<V>>], stats: &mut IterationStats) {
+    let (mut sum_i, mut max_i, mut n_i) = (0.0, 0.0f64, 0usize);
+    let (mut sum_a, mut max_a, mut n_a) = (0.0, 0.0f64, 0usize);
+    for e in evals.iter().flatten() {
+        let g = e.gradc.length();
+        sum_a += g;
+        max_a = max_a.max(g);
+        n_a += 1;
+        if !e.truncated {
+            sum_i += g;
+            max_i = max_i.max(g);
+            n_i += 1;
+        }
+    }
+    if n_a > 0 {
+        stats.gradc_mean_all = sum_a / n_a as f64;
+        stats.gradc_max_all = max_a;
+    }
+    if n_i > 0 {
+        stats.gradc_mean = sum_i / n_i as f64;
+        stats.gradc_max = max_i;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::region::PolygonRegion;
+    use glam::DVec2;
+
+    /// A trapezoid packed with reduced iteration counts: every particle stays inside, the
+    /// first layer moves to about `dx/2` from the walls, and mean `|grad C|` drops.
+    #[test]
+    fn packs_a_trapezoid() {
+        let dx = 0.05;
+        let region = PolygonRegion::new(vec![vec![
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(0.8, 0.6),
+            DVec2::new(0.15, 0.6),
+        ]])
+        .unwrap();
+        let lattice = region.lattice(dx);
+        let mut params = PackParams::new(dx, 2.0 * dx);
+        params.stage_a_max = 1500;
+        params.stage_c_iterations = 200;
+        let walls = PackWalls::new(&region.elements(dx), 2.0 * params.h);
+        let mut packer = Packer::new(params, lattice, walls).unwrap();
+        let history = packer.run(|_| {});
+        let (first, last) = (history[0], *history.last().unwrap());
+        assert!(
+            last.gradc_mean_all < 0.5 * first.gradc_mean_all,
+            "{} -> {}",
+            first.gradc_mean_all,
+            last.gradc_mean_all
+        );
+        assert!(packer.positions.iter().all(|&p| region.contains(p)));
+        let layer: Vec<f64> = packer
+            .wall_distances()
+            .into_iter()
+            .filter(|&d| d < 0.8 * dx)
+            .collect();
+        let mean = layer.iter().sum::<f64>() / layer.len() as f64;
+        assert!(
+            (mean / dx - 0.5).abs() < 0.05,
+            "first layer at {} dx",
+            mean / dx
+        );
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let walls = PackWalls::<DVec2>::new(&[], 0.2);
+        let mut p = PackParams::new(0.05, 0.1);
+        p.max_shift = -1.0;
+        let e = Packer::new(p, vec![DVec2::ZERO], walls.clone()).unwrap_err();
+        assert!(e.to_string().contains("max_shift"));
+        let e = Packer::new(PackParams::new(0.05, 0.1), Vec::new(), walls).unwrap_err();
+        assert!(matches!(e, PackError::NoParticles { .. }));
+    }
+}

@@ -1,0 +1,531 @@
+//! `bisph pack`: BIPI (paper 4) on every block of a case, with its outputs.
+//!
+//! Writes into the output folder:
+//! - `pack.csv`: `iteration,kinetic,tpd,gradc_mean,gradc_max` (contract; `gradc_*` over
+//!   particles with `gamma = 1`, as paper 4's figs 6, 7, 10), then `gradc_mean_all,
+//!   gradc_max_all` (over all particles), `moved`, `stage` (0 lattice, 1 step 2a, 3 step 2c),
+//!   `block`. `kinetic = 1/2 sum m |dx|^2` takes the shift per iteration as the velocity;
+//!   `tpd = sum |x - x0|` [m]. Units of `|grad C|`: 1/m.
+//! - `particles.vtu` (packed, with `block`, `grad_c`, `wall_distance`, `displacement`,
+//!   `frozen`), `lattice.vtu` (the start), `walls.vtu` (the boundary elements);
+//! - `particles-<k>.csv` (`x,y[,z]`) per block and `packed.toml`: the case with every
+//!   fluid block read from its packed file (extra columns `grad_c,wall_distance,frozen`
+//!   are for inspection), ready for `bisph run packed.toml`;
+//! - `summary.json` (per block: counts, iterations, timings, `|grad C|` before and after, the
+//!   first layer's distance to the wall); `pack-<k>.png` plots.
+
+use crate::build::CaseDim;
+use crate::case::{Case, CaseError, LoadedCase};
+use crate::output::{at, write_atomic};
+use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
+use crate::regions::BlockRegion;
+use crate::runner::RunError;
+use crate::vtk::{write_cells_vtu, write_points_vtu, DataArray};
+use bisph_core::packing::{IterationStats, PackParams, PackWalls, Packer, Stage};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// BIPI parameters of a case for spacing `dx` (defaults of paper 4 where the case is silent).
+pub fn pack_params(case: &Case, dx: f64) -> PackParams {
+    let p = &case.pack;
+    let mut q = PackParams::new(dx, case.resolution.h_over_dx * dx);
+    q.mass = case.fluid.density * dx.powi(case.dim as i32);
+    q.diffusion = p.diffusion.unwrap_or(q.diffusion);
+    q.max_shift = p.max_shift.unwrap_or(q.max_shift);
+    q.push_radius = p.push_radius.unwrap_or(q.push_radius);
+    q.stage_a_max = p.stage_a_max.unwrap_or(q.stage_a_max);
+    q.plateau_window = p.plateau_window.unwrap_or(q.plateau_window);
+    q.plateau_tolerance = p.plateau_tolerance.unwrap_or(q.plateau_tolerance);
+    q.freeze_distance = p.freeze_distance.unwrap_or(q.freeze_distance);
+    q.stage_c_iterations = p.stage_c_iterations.unwrap_or(q.stage_c_iterations);
+    q.stage_c_tolerance = p.stage_c_tolerance.unwrap_or(q.stage_c_tolerance);
+    q.report_interval = p.report_interval.unwrap_or(q.report_interval);
+    q
+}
+
+/// One packed block.
+pub struct PackedBlock<V: CaseDim> {
+    /// Its region.
+    pub region: BlockRegion<V>,
+    /// The packer after the run (positions, walls, frozen flags).
+    pub packer: Packer<V>,
+    /// Metrics of every iteration.
+    pub history: Vec<IterationStats>,
+    /// Wall-clock seconds of step 2.
+    pub seconds: f64,
+}
+
+/// Packs block `k` of a case (steps 1 and 2 of paper 4).
+pub fn pack_block<V: CaseDim>(
+    loaded: &LoadedCase,
+    k: usize,
+    observe: &mut dyn FnMut(&IterationStats),
+) -> Result<PackedBlock<V>, CaseError> {
+    let case = &loaded.case;
+    let block = &case.fluid_block[k];
+    let key = format!("fluid_block[{k}]");
+    if block.shape == "particles" {
+        return Err(loaded.error(
+            &format!("{key}.shape"),
+            "a \"particles\" block has no geometry to pack",
+        ));
+    }
+    let dx = block.dx.unwrap_or(case.resolution.dx);
+    let params = pack_params(case, dx);
+    // The wall integrals are exact for elements of any size: elements as large as the
+    // support keep the count (and the cost) down.
+    let element_size = (dx * case.resolution.element_over_dx).max(2.0 * params.h);
+    let region = V::block_region(loaded, &key, block, dx, element_size)?;
+    let walls = PackWalls::new(&region.elements, 2.0 * params.h);
+    let mut packer = Packer::new(params, region.lattice.clone(), walls)
+        .map_err(|e| loaded.error(&key, e.to_string()))?;
+    let started = Instant::now();
+    let history = packer.run(|s| observe(s));
+    Ok(PackedBlock {
+        region,
+        packer,
+        history,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Distances of the first layer to the wall, in units of `dx`.
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct LayerStats {
+    /// Particles closer than `dx` to a wall.
+    pub count: usize,
+    /// Mean distance / dx.
+    pub mean: f64,
+    /// Standard deviation / dx.
+    pub std: f64,
+    /// Smallest / dx.
+    pub min: f64,
+    /// Largest / dx.
+    pub max: f64,
+}
+
+impl LayerStats {
+    /// Statistics of the distances below `dx` (the first layer).
+    pub fn of(distances: &[f64], dx: f64) -> Self {
+        let d: Vec<f64> = distances
+            .iter()
+            .filter(|&&d| d < dx)
+            .map(|d| d / dx)
+            .collect();
+        if d.is_empty() {
+            return LayerStats::default();
+        }
+        let n = d.len() as f64;
+        let mean = d.iter().sum::<f64>() / n;
+        let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+        LayerStats {
+            count: d.len(),
+            mean,
+            std: var.sqrt(),
+            min: d.iter().copied().fold(f64::INFINITY, f64::min),
+            max: d.iter().copied().fold(0.0, f64::max),
+        }
+    }
+}
+
+/// `summary.json` entry of one block.
+#[derive(Debug, Clone, Serialize)]
+pub struct BlockSummary {
+    /// Block index.
+    pub block: usize,
+    /// A solid body's particles.
+    pub solid: bool,
+    /// Particles.
+    pub particles: usize,
+    /// Spacing.
+    pub dx: f64,
+    /// Smoothing length.
+    pub h: f64,
+    /// Boundary elements.
+    pub boundary_elements: usize,
+    /// Area (2-D) or volume (3-D) of the region.
+    pub region_measure: f64,
+    /// Particles times `dx^d`.
+    pub particle_measure: f64,
+    /// Iterations of step 2a.
+    pub stage_a_iterations: usize,
+    /// Iterations of step 2c.
+    pub stage_c_iterations: usize,
+    /// Seconds of step 2.
+    pub seconds: f64,
+    /// Seconds per iteration.
+    pub seconds_per_iteration: f64,
+    /// Mean |grad C| over particles with gamma = 1, lattice / packed.
+    pub gradc_mean: [f64; 2],
+    /// Largest |grad C| over particles with gamma = 1, lattice / packed.
+    pub gradc_max: [f64; 2],
+    /// Mean |grad C| over all particles, lattice / packed.
+    pub gradc_mean_all: [f64; 2],
+    /// Largest |grad C| over all particles, lattice / packed.
+    pub gradc_max_all: [f64; 2],
+    /// First layer (closer than dx to a wall) on the lattice.
+    pub first_layer_lattice: LayerStats,
+    /// First layer after packing.
+    pub first_layer: LayerStats,
+    /// Packed particles not strictly inside the region (must be 0).
+    pub outside: usize,
+}
+
+/// `summary.json` of `bisph pack`.
+#[derive(Debug, Clone, Serialize)]
+pub struct PackSummary {
+    /// Case name.
+    pub case: String,
+    /// Dimension.
+    pub dim: usize,
+    /// Blocks.
+    pub blocks: Vec<BlockSummary>,
+    /// Wall seconds in all.
+    pub wall_seconds: f64,
+}
+
+/// Packs every block of a case and writes the outputs (see the module doc) into `out`.
+pub fn pack_case(
+    loaded: &LoadedCase,
+    out: &Path,
+    progress: &mut dyn FnMut(usize, &IterationStats),
+) -> Result<PackSummary, RunError> {
+    if loaded.case.dim == 2 {
+        pack_dim::<glam::DVec2>(loaded, out, progress)
+    } else {
+        pack_dim::<glam::DVec3>(loaded, out, progress)
+    }
+}
+
+fn stage_code(s: Stage) -> f64 {
+    match s {
+        Stage::Start => 0.0,
+        Stage::A => 1.0,
+        Stage::C => 3.0,
+    }
+}
+
+fn pack_dim<V: CaseDim>(
+    loaded: &LoadedCase,
+    out: &Path,
+    progress: &mut dyn FnMut(usize, &IterationStats),
+) -> Result<PackSummary, RunError> {
+    let started = Instant::now();
+    at(out, std::fs::create_dir_all(out))?;
+    write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
+    let case = &loaded.case;
+    let mut csv = String::from(
+        "iteration,kinetic,tpd,gradc_mean,gradc_max,gradc_mean_all,gradc_max_all,moved,stage,block\n",
+    );
+    let mut summaries = Vec::new();
+    let mut all_points: Vec<[f64; 3]> = Vec::new();
+    let mut lattice_points: Vec<[f64; 3]> = Vec::new();
+    let (mut block_id, mut gradc, mut dist, mut disp, mut frozen) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut wall_vertices, mut wall_cells, mut wall_normals, mut wall_block) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut packed_doc: toml::Table = loaded
+        .text
+        .parse()
+        .map_err(|e: toml::de::Error| RunError::Case(loaded.error("", e.to_string())))?;
+    let mut kept_blocks = Vec::new();
+    for (k, block) in case.fluid_block.iter().enumerate() {
+        if block.shape == "particles" {
+            if let Some(b) = packed_doc
+                .get("fluid_block")
+                .and_then(|v| v.as_array())
+                .and_then(|a| a.get(k))
+            {
+                kept_blocks.push(b.clone());
+            }
+            continue;
+        }
+        let mut packed =
+            pack_block::<V>(loaded, k, &mut |s| progress(k, s)).map_err(RunError::Case)?;
+        let p = &packed.packer;
+        for s in &packed.history {
+            let _ = writeln!(
+                csv,
+                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+                s.iteration,
+                s.kinetic,
+                s.tpd,
+                s.gradc_mean,
+                s.gradc_max,
+                s.gradc_mean_all,
+                s.gradc_max_all,
+                s.moved,
+                stage_code(s.stage),
+                k
+            );
+        }
+        let distances = p.wall_distances();
+        let start_distances: Vec<f64> = p.start.iter().map(|&x| p.walls.distance(x)).collect();
+        let dx = p.params.dx;
+        let outside = p
+            .positions
+            .iter()
+            .filter(|&&x| !packed.region.contains(x))
+            .count();
+        let (first, last) = (packed.history[0], *packed.history.last().unwrap());
+        let iterations_a = packed
+            .history
+            .iter()
+            .filter(|s| s.stage == Stage::A)
+            .count();
+        let iterations_c = packed
+            .history
+            .iter()
+            .filter(|s| s.stage == Stage::C)
+            .count()
+            .saturating_sub(1);
+        let iterations = (iterations_a + iterations_c).max(1);
+        summaries.push(BlockSummary {
+            block: k,
+            solid: block.solid,
+            particles: p.positions.len(),
+            dx,
+            h: p.params.h,
+            boundary_elements: p.walls.elements.len(),
+            region_measure: packed.region.measure,
+            particle_measure: p.positions.len() as f64 * p.volume(),
+            stage_a_iterations: iterations_a,
+            stage_c_iterations: iterations_c,
+            seconds: packed.seconds,
+            seconds_per_iteration: packed.seconds / iterations as f64,
+            gradc_mean: [first.gradc_mean, last.gradc_mean],
+            gradc_max: [first.gradc_max, last.gradc_max],
+            gradc_mean_all: [first.gradc_mean_all, last.gradc_mean_all],
+            gradc_max_all: [first.gradc_max_all, last.gradc_max_all],
+            first_layer_lattice: LayerStats::of(&start_distances, dx),
+            first_layer: LayerStats::of(&distances, dx),
+            outside,
+        });
+        // Particle outputs.
+        let mags = packed.packer.gradc_magnitudes();
+        let p = &packed.packer;
+        let mut file = String::new();
+        let names = ["x", "y", "z"];
+        let _ = writeln!(
+            file,
+            "{},grad_c,wall_distance,frozen",
+            names[..V::DIM].join(",")
+        );
+        for (i, &x) in p.positions.iter().enumerate() {
+            let xyz = x.to_xyz();
+            let row: Vec<String> = xyz[..V::DIM].iter().map(|c| format!("{c:.17e}")).collect();
+            let _ = writeln!(
+                file,
+                "{},{:e},{:e},{}",
+                row.join(","),
+                mags[i].0,
+                distances[i],
+                u8::from(p.frozen[i])
+            );
+            all_points.push(xyz);
+            lattice_points.push(p.start[i].to_xyz());
+            block_id.push(k as f64);
+            gradc.push(mags[i].0);
+            dist.push(distances[i]);
+            disp.extend((x - p.start[i]).to_xyz());
+            frozen.push(if p.frozen[i] { 1.0 } else { 0.0 });
+        }
+        let name = format!("particles-{k}.csv");
+        write_atomic(&out.join(&name), file.as_bytes())?;
+        let e = &p.walls.elements;
+        for j in 0..e.len() {
+            let base = wall_vertices.len() as u32;
+            let corners = e.current_corners(j);
+            wall_vertices.extend(corners.iter().map(|c| c.to_xyz()));
+            wall_cells.push(
+                (0..corners.len() as u32)
+                    .map(|m| base + m)
+                    .collect::<Vec<u32>>(),
+            );
+            wall_normals.extend(e.normal[j].to_xyz());
+            wall_block.push(k as f64);
+        }
+        if !block.solid {
+            if let Some(b) = packed_doc
+                .get("fluid_block")
+                .and_then(|v| v.as_array())
+                .and_then(|a| a.get(k))
+                .and_then(|v| v.as_table())
+            {
+                let mut b = b.clone();
+                for key in [
+                    "min",
+                    "max",
+                    "points",
+                    "centre",
+                    "radius",
+                    "subdivisions",
+                    "units",
+                    "scale",
+                    "rotate",
+                    "translate",
+                    "hole",
+                    "fill",
+                ] {
+                    b.remove(key);
+                }
+                b.insert("shape".into(), toml::Value::String("particles".into()));
+                b.insert("file".into(), toml::Value::String(name.clone()));
+                b.insert("dx".into(), toml::Value::Float(dx));
+                kept_blocks.push(toml::Value::Table(b));
+            }
+        }
+        plot_block(out, k, &packed.history)?;
+        packed.history.clear();
+    }
+    let vtk_err =
+        |path: &Path, e: std::io::Error| RunError::Output(at::<()>(path, Err(e)).unwrap_err());
+    let path = out.join("particles.vtu");
+    write_points_vtu(
+        &path,
+        &all_points,
+        &[
+            DataArray {
+                name: "block",
+                components: 1,
+                values: &block_id,
+            },
+            DataArray {
+                name: "grad_c",
+                components: 1,
+                values: &gradc,
+            },
+            DataArray {
+                name: "wall_distance",
+                components: 1,
+                values: &dist,
+            },
+            DataArray {
+                name: "displacement",
+                components: 3,
+                values: &disp,
+            },
+            DataArray {
+                name: "frozen",
+                components: 1,
+                values: &frozen,
+            },
+        ],
+    )
+    .map_err(|e| vtk_err(&path, e))?;
+    let path = out.join("lattice.vtu");
+    write_points_vtu(
+        &path,
+        &lattice_points,
+        &[DataArray {
+            name: "block",
+            components: 1,
+            values: &block_id,
+        }],
+    )
+    .map_err(|e| vtk_err(&path, e))?;
+    let path = out.join("walls.vtu");
+    write_cells_vtu(
+        &path,
+        &wall_vertices,
+        &wall_cells,
+        &[
+            DataArray {
+                name: "normal",
+                components: 3,
+                values: &wall_normals,
+            },
+            DataArray {
+                name: "block",
+                components: 1,
+                values: &wall_block,
+            },
+        ],
+    )
+    .map_err(|e| vtk_err(&path, e))?;
+    write_atomic(&out.join("pack.csv"), csv.as_bytes())?;
+    packed_doc.insert("fluid_block".into(), toml::Value::Array(kept_blocks));
+    let packed_text = toml::to_string(&packed_doc).unwrap_or_default();
+    write_atomic(
+        &out.join("packed.toml"),
+        format!(
+            "# {} packed by `bisph pack`: every fluid block starts from its packed particles.\n{packed_text}",
+            case.name
+        )
+        .as_bytes(),
+    )?;
+    let summary = PackSummary {
+        case: case.name.clone(),
+        dim: V::DIM,
+        blocks: summaries,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    };
+    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    write_atomic(&out.join("summary.json"), json.as_bytes())?;
+    Ok(summary)
+}
+
+/// `pack-<k>.png`: kinetic energy, TPD and |grad C| against the iteration.
+fn plot_block(out: &Path, k: usize, history: &[IterationStats]) -> Result<(), RunError> {
+    // Rows without a value (metrics not evaluated that iteration) are left out, so lines join.
+    let series = |label: &str, f: &dyn Fn(&IterationStats) -> f64| {
+        let (x, y) = history
+            .iter()
+            .filter(|s| f(s).is_finite())
+            .map(|s| (s.iteration as f64, f(s)))
+            .unzip();
+        (
+            PlotSeries {
+                label: label.into(),
+                x,
+                y,
+            },
+            Style::Line,
+        )
+    };
+    let plots = [
+        (
+            format!("pack-{k}-gradc.png"),
+            Plot {
+                title: format!("BIPI block {k}: |grad C|"),
+                x_label: "iteration".into(),
+                y_label: "|grad C| [1/m]".into(),
+                series: vec![
+                    series("mean, gamma = 1", &|s| s.gradc_mean),
+                    series("max, gamma = 1", &|s| s.gradc_max),
+                    series("mean, all", &|s| s.gradc_mean_all),
+                    series("max, all", &|s| s.gradc_max_all),
+                ],
+            },
+        ),
+        (
+            format!("pack-{k}-tpd.png"),
+            Plot {
+                title: format!("BIPI block {k}: total particle displacement"),
+                x_label: "iteration".into(),
+                y_label: "TPD [m]".into(),
+                series: vec![series("TPD", &|s| s.tpd)],
+            },
+        ),
+        (
+            format!("pack-{k}-kinetic.png"),
+            Plot {
+                title: format!("BIPI block {k}: kinetic energy of the shifts"),
+                x_label: "iteration".into(),
+                y_label: "1/2 sum m |dx|^2".into(),
+                series: vec![series("kinetic", &|s| s.kinetic)],
+            },
+        ),
+    ];
+    for (name, plot) in plots {
+        let path = out.join(name);
+        write_png(&plot, &path, 900, 600).map_err(|e| {
+            RunError::Output(
+                at::<()>(&path, Err(std::io::Error::other(e.to_string()))).unwrap_err(),
+            )
+        })?;
+    }
+    Ok(())
+}
