@@ -275,7 +275,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
         match case.run(args.quick, &out.join(case.name())) {
             Ok(mut report) => {
                 report.wall_seconds = started.elapsed().as_secs_f64();
-                if report.checks.iter().any(|c| !c.passed()) {
+                if report.checks.iter().any(|c| c.fails()) {
                     failed.push(case.name().to_string());
                 }
                 reports.push(report);
