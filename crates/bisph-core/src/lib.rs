@@ -20,6 +20,7 @@ pub mod neighbours;
 pub mod packing;
 pub mod particles;
 pub mod probes;
+pub mod quadrature;
 pub mod region;
 pub mod simulation;
 pub mod terms;

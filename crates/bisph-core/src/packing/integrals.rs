@@ -152,20 +152,7 @@ impl WallIntegrals for DVec2 {
     }
 }
 
-/// 8-point Gauss-Legendre nodes (positive half) on `[-1, 1]`.
-const GL_X: [f64; 4] = [
-    0.183_434_642_495_649_8,
-    0.525_532_409_916_329,
-    0.796_666_477_413_626_7,
-    0.960_289_856_497_536_3,
-];
-/// Their weights.
-const GL_W: [f64; 4] = [
-    0.362_683_783_378_362,
-    0.313_706_645_877_887_3,
-    0.222_381_034_453_374_5,
-    0.101_228_536_290_376_3,
-];
+use crate::quadrature::{GL_W, GL_X};
 
 /// `int_{T cap B(x, radius)} g_k(|y - x|) dA` over the triangle `tri` for `N` functions at
 /// once, given their radial primitives `big_h(s, a)[k] = int_0^s g_k(sqrt(a^2 + u^2)) u du`
@@ -517,19 +504,7 @@ mod tests {
     use super::*;
     use crate::geometry::{box_elements_2d, box_elements_3d};
 
-    /// Composite 8-point Gauss rule with `panels` panels.
-    fn gauss_n(a: f64, b: f64, panels: usize, f: impl Fn(f64) -> f64) -> f64 {
-        let width = (b - a) / panels as f64;
-        let mut sum = 0.0;
-        for p in 0..panels {
-            let mid = a + (p as f64 + 0.5) * width;
-            for k in 0..4 {
-                let d = 0.5 * width * GL_X[k];
-                sum += GL_W[k] * 0.5 * width * (f(mid - d) + f(mid + d));
-            }
-        }
-        sum
-    }
+    use crate::quadrature::gauss_legendre as gauss_n;
 
     #[test]
     fn segment_integral_matches_quadrature_with_clipping() {

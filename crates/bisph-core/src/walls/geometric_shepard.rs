@@ -304,31 +304,7 @@ mod tests {
         }
     }
 
-    /// Composite 8-point Gauss-Legendre rule of `f` over `[a, b]` with `panels` panels.
-    fn gauss(a: f64, b: f64, panels: usize, mut f: impl FnMut(f64) -> f64) -> f64 {
-        const X: [f64; 4] = [
-            0.1834346424956498,
-            0.525532409916329,
-            0.7966664774136267,
-            0.9602898564975363,
-        ];
-        const W: [f64; 4] = [
-            0.362683783378362,
-            0.3137066458778873,
-            0.2223810344533745,
-            0.1012285362903763,
-        ];
-        let width = (b - a) / panels as f64;
-        let mut sum = 0.0;
-        for p in 0..panels {
-            let mid = a + (p as f64 + 0.5) * width;
-            for k in 0..4 {
-                let d = 0.5 * width * X[k];
-                sum += W[k] * 0.5 * width * (f(mid - d) + f(mid + d));
-            }
-        }
-        sum
-    }
+    use crate::quadrature::gauss_legendre as gauss;
 
     /// Area integral of W over the box's interior within the support of `x`, by iterated
     /// Gauss quadrature over exact limits (the integrand is smooth inside them).
