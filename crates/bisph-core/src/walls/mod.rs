@@ -218,10 +218,14 @@ impl<V: Vector> Walls<V> {
                 if positions {
                     e.centre[j] = e.reference_centre[j] + p.axis * (along * (lambda - 1.0));
                     e.area[j] = e.reference_area[j] * lambda;
+                    let mut reach: f64 = 0.0;
                     for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
                         let a = e.reference_corners[m].dot(p.axis) - group.anchor;
                         e.corners[m] = e.reference_corners[m] + p.axis * (a * (lambda - 1.0));
+                        reach = reach.max((e.corners[m] - e.centre[j]).length());
                     }
+                    e.reach[j] = reach;
+                    e.max_reach = e.max_reach.max(reach);
                 }
             }
         }
