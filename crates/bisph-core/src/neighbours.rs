@@ -124,36 +124,21 @@ impl<V: Vector> CellGrid<V> {
     /// Calls `visit(j)` for every point `j` in the cells around `x` (a superset of the points
     /// within one cell size of `x`). The caller filters by distance.
     #[inline(always)]
-    pub fn for_each_candidate(&self, x: V, mut visit: impl FnMut(usize)) {
-        let c = self.coords(x);
-        let mut lo = [0usize; 3];
-        let mut hi = [0usize; 3];
-        for k in 0..3 {
-            let d = self.dims[k] as i64;
-            let a = (c[k] - 1).max(0);
-            let b = (c[k] + 1).min(d - 1);
-            if a > b {
-                return; // x is more than one cell outside the grid
-            }
-            lo[k] = a as usize;
-            hi[k] = b as usize;
-        }
-        for cz in lo[2]..=hi[2] {
-            for cy in lo[1]..=hi[1] {
-                let row = self.dims[0] * (cy + self.dims[1] * cz);
-                let start = self.cell_start[row + lo[0]] as usize;
-                let end = self.cell_start[row + hi[0] + 1] as usize;
-                for &j in &self.items[start..end] {
-                    visit(j as usize);
-                }
-            }
-        }
+    pub fn for_each_candidate(&self, x: V, visit: impl FnMut(usize)) {
+        self.for_each_in_span(x, 1, visit);
     }
 
     /// Calls `visit(j)` for every point `j` in the cells that can hold points within `radius`
     /// of `x` (a superset of them, for radii larger than one cell as well).
-    pub fn for_each_candidate_within(&self, x: V, radius: f64, mut visit: impl FnMut(usize)) {
+    pub fn for_each_candidate_within(&self, x: V, radius: f64, visit: impl FnMut(usize)) {
         let span = ((radius * self.inv_cell).ceil() as i64).max(1);
+        self.for_each_in_span(x, span, visit);
+    }
+
+    /// Visits the points in the cells at most `span` cells away from the cell of `x` along each
+    /// axis (the grid is clipped; nothing is visited when `x` lies more than `span` cells out).
+    #[inline(always)]
+    fn for_each_in_span(&self, x: V, span: i64, mut visit: impl FnMut(usize)) {
         let c = self.coords(x);
         let mut lo = [0usize; 3];
         let mut hi = [0usize; 3];
