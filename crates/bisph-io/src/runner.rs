@@ -40,6 +40,36 @@ impl From<OutputError> for RunError {
     }
 }
 
+/// Wall-clock seconds of the time loop by phase.
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseSeconds {
+    /// Cell grid rebuilds, reordering excluded.
+    pub neighbour_search: f64,
+    /// Reordering the particles by cell.
+    pub reorder: f64,
+    /// Fluid and wall terms of the rate sweeps, equation of state included.
+    pub forces: f64,
+    /// Wall pressures (extrapolation to the elements).
+    pub wall_pressure: f64,
+    /// The rest of the steps: updates, bounce, checks.
+    pub integration: f64,
+    /// Everything outside the steps: energies, probes, CSV and VTK output.
+    pub output: f64,
+}
+
+impl PhaseSeconds {
+    fn new(t: &bisph_core::simulation::PhaseTimes, wall_seconds: f64) -> Self {
+        PhaseSeconds {
+            neighbour_search: t.neighbours - t.reorder,
+            reorder: t.reorder,
+            forces: t.rates - t.wall_pressure,
+            wall_pressure: t.wall_pressure,
+            integration: t.steps - t.neighbours - t.rates,
+            output: wall_seconds - t.steps,
+        }
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
@@ -59,6 +89,8 @@ pub struct Summary {
     pub wall_seconds: f64,
     /// Fluid particles times steps over wall seconds.
     pub particle_steps_per_second: f64,
+    /// Where the wall seconds went.
+    pub phase_seconds: PhaseSeconds,
     /// `(E_total(end) - E_total(0)) / E_scale`, where `E_scale` is the initial kinetic and
     /// compressible energy plus the potential energy above the lowest particle.
     pub energy_drift_relative: f64,
@@ -194,6 +226,7 @@ pub fn run<V: CaseDim>(
     let mut probe_history: Vec<Vec<f64>> = Vec::new();
     let mut max_drift: f64 = 0.0;
     let mut max_speed: f64 = 0.0;
+    sim.timings = Default::default();
     let started = Instant::now();
     let mut next_series = 0.0;
     let mut next_frame = 0.0;
@@ -292,6 +325,7 @@ pub fn run<V: CaseDim>(
         wall_seconds,
         particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
             / wall_seconds.max(1e-9),
+        phase_seconds: PhaseSeconds::new(&sim.timings, wall_seconds),
         energy_drift_relative: (e_final.total - e0.total) / scale,
         energy_scale: scale,
         energy_total_initial: e0.total,

@@ -42,6 +42,8 @@ pub struct PhaseTimes {
     pub reorder: f64,
     /// Rate evaluations: equation of state, fluid and wall terms, wall pressures.
     pub rates: f64,
+    /// Of which the wall pressures (extrapolation to the elements before the sweep).
+    pub wall_pressure: f64,
     /// Whole steps (so integration = steps - neighbours - rates).
     pub steps: f64,
 }
@@ -275,7 +277,7 @@ impl<V: Vector> Simulation<V> {
             volume,
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
-        match self.config.wall_model {
+        self.timings.wall_pressure += match self.config.wall_model {
             WallModelChoice::Energy => sweep(
                 &model,
                 &EnergyConservingWalls,
@@ -292,7 +294,7 @@ impl<V: Vector> Simulation<V> {
                 };
                 sweep(&model, &bi, &state, grid, walls, acceleration, density_rate)
             }
-        }
+        };
         self.wall_power = self.walls.power();
         self.timings.rates += start.elapsed().as_secs_f64();
     }
@@ -440,7 +442,8 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Wall pressures, then rates, for one wall model.
+/// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall
+/// pressures.
 fn sweep<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
@@ -449,8 +452,10 @@ fn sweep<V: Vector, W: WallModel<V>>(
     walls: &mut Walls<V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
-) {
+) -> f64 {
+    let start = Instant::now();
     wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
+    let wall_seconds = start.elapsed().as_secs_f64();
     compute_rates(
         model,
         wall_model,
@@ -461,4 +466,5 @@ fn sweep<V: Vector, W: WallModel<V>>(
         acceleration,
         density_rate,
     );
+    wall_seconds
 }
