@@ -415,7 +415,8 @@ impl ValidationCase for ShepardCorner2d {
 /// Paper 2, 3.1: still water, H = 92 mm in the 0.9 m wide SPHERIC test 9 tank, `bi` walls.
 pub struct HydrostaticShepard;
 
-const TANK: &str = r#"
+/// The paper-2 still-water tank (also the `bisph bench --suite shepard` case).
+pub const TANK: &str = r#"
 name = "hydrostatic-shepard"
 dim = 2
 boundary = "bi"

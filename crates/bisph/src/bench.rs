@@ -14,6 +14,10 @@
 //! Suites: `quick` (2-D 20k), `standard` (2-D 20k and 200k, 3-D 100k), `full` (adds 2-D 1M and
 //! 3-D 1M); each at `2h = 2.83 dx` (the neighbour count of DualSPHysics) and `h/dx = 2`, with
 //! 1 and 2 threads. `--particles` and `--dim` replace the suite's sizes.
+//!
+//! Suite `shepard` (paper 2, table 1): the cost of the Shepard factor on the paper-2 still-water
+//! tank (`bi` walls) with discrete and geometric gamma, against the energy-conserving walls
+//! (no renormalisation, gamma = 1), at 10k and 50k particles.
 
 use bisph_core::Simulation;
 use bisph_io::build::{build_simulation, CaseDim};
@@ -30,6 +34,8 @@ const DAM_BREAK_3D: &str = include_str!("../../../cases/dam-break-3d.toml");
 /// Water volumes of the two dam breaks: 0.6 x 0.3 m and 0.6 x 0.3 x 0.3 m.
 const WATER_AREA_2D: f64 = 0.18;
 const WATER_VOLUME_3D: f64 = 0.054;
+/// Water area of paper 2's still-water tank, 0.9 x 0.092 m.
+const TANK_AREA: f64 = 0.0828;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Suite {
@@ -39,6 +45,41 @@ pub enum Suite {
     Standard,
     /// 2-D 20k, 200k and 1M, 3-D 100k and 1M.
     Full,
+    /// Shepard factor cost on the still-water tank: discrete, geometric, none; 10k and 50k.
+    Shepard,
+}
+
+/// The benchmarked case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum BenchCase {
+    /// The built-in dam break of the configuration's dimension.
+    DamBreak,
+    /// Paper 2's still-water tank with `bi` walls and discrete gamma.
+    TankDiscrete,
+    /// The same with geometric gamma.
+    TankGeometric,
+    /// The same tank with the energy-conserving walls (gamma = 1).
+    TankEnergy,
+}
+
+impl BenchCase {
+    const ALL: [(BenchCase, &'static str); 4] = [
+        (BenchCase::DamBreak, "dam-break"),
+        (BenchCase::TankDiscrete, "tank-discrete"),
+        (BenchCase::TankGeometric, "tank-geometric"),
+        (BenchCase::TankEnergy, "tank-energy"),
+    ];
+
+    fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(c, _)| *c == self)
+            .map_or("", |(_, n)| n)
+    }
+
+    fn parse(text: &str) -> Option<BenchCase> {
+        Self::ALL.iter().find(|(_, n)| *n == text).map(|(c, _)| *c)
+    }
 }
 
 #[derive(clap::Args)]
@@ -65,8 +106,8 @@ pub struct BenchArgs {
     /// Also write the results as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Internal: run one configuration `dim,particles,h_over_dx,threads,steps` in this process
-    /// and print its result as JSON.
+    /// Internal: run one configuration `case,dim,particles,h_over_dx,threads,steps` in this
+    /// process and print its result as JSON.
     #[arg(long, hide = true)]
     single: Option<String>,
 }
@@ -74,6 +115,7 @@ pub struct BenchArgs {
 /// One configuration of the suite.
 #[derive(Clone, Copy, Debug)]
 struct Config {
+    case: BenchCase,
     dim: u8,
     particles: usize,
     h_over_dx: f64,
@@ -84,12 +126,13 @@ struct Config {
 impl Config {
     fn parse(text: &str) -> Result<Config, String> {
         let bad =
-            || format!("--single expects dim,particles,h_over_dx,threads,steps, got {text:?}");
+            || format!("--single expects case,dim,particles,h_over_dx,threads,steps, got {text:?}");
         let parts: Vec<&str> = text.split(',').collect();
-        let [dim, particles, h, threads, steps] = parts[..] else {
+        let [case, dim, particles, h, threads, steps] = parts[..] else {
             return Err(bad());
         };
         Ok(Config {
+            case: BenchCase::parse(case).ok_or_else(bad)?,
             dim: dim.parse().map_err(|_| bad())?,
             particles: particles.parse().map_err(|_| bad())?,
             h_over_dx: h.parse().map_err(|_| bad())?,
@@ -100,8 +143,13 @@ impl Config {
 
     fn encode(&self) -> String {
         format!(
-            "{},{},{},{},{}",
-            self.dim, self.particles, self.h_over_dx, self.threads, self.steps
+            "{},{},{},{},{},{}",
+            self.case.name(),
+            self.dim,
+            self.particles,
+            self.h_over_dx,
+            self.threads,
+            self.steps
         )
     }
 }
@@ -112,24 +160,43 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         println!("{result}");
         return Ok(());
     }
-    let sizes: Vec<(u8, usize)> = if !args.particles.is_empty() {
-        args.particles.iter().map(|&n| (args.dim, n)).collect()
+    let dam = BenchCase::DamBreak;
+    let sizes: Vec<(BenchCase, u8, usize)> = if !args.particles.is_empty() {
+        args.particles.iter().map(|&n| (dam, args.dim, n)).collect()
     } else {
         match args.suite {
-            Suite::Quick => vec![(2, 20_000)],
-            Suite::Standard => vec![(2, 20_000), (2, 200_000), (3, 100_000)],
+            Suite::Quick => vec![(dam, 2, 20_000)],
+            Suite::Standard => vec![(dam, 2, 20_000), (dam, 2, 200_000), (dam, 3, 100_000)],
             Suite::Full => vec![
-                (2, 20_000),
-                (2, 200_000),
-                (2, 1_000_000),
-                (3, 100_000),
-                (3, 1_000_000),
+                (dam, 2, 20_000),
+                (dam, 2, 200_000),
+                (dam, 2, 1_000_000),
+                (dam, 3, 100_000),
+                (dam, 3, 1_000_000),
             ],
+            Suite::Shepard => [10_000, 50_000]
+                .into_iter()
+                .flat_map(|n| {
+                    [
+                        BenchCase::TankDiscrete,
+                        BenchCase::TankGeometric,
+                        BenchCase::TankEnergy,
+                    ]
+                    .map(|c| (c, 2, n))
+                })
+                .collect(),
         }
+    };
+    // Paper 2's tank is run at its own h/dx = 2.
+    let h_list = if matches!(args.suite, Suite::Shepard) && args.particles.is_empty() {
+        vec![2.0]
+    } else {
+        args.h_over_dx.clone()
     };
     let exe = std::env::current_exe().map_err(|e| (1, format!("cannot find bisph itself: {e}")))?;
     println!(
-        "{:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
+        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
+        "case",
         "dim",
         "h/dx",
         "threads",
@@ -146,14 +213,15 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         "B/part"
     );
     let mut results = Vec::new();
-    for &(dim, particles) in &sizes {
+    for &(case, dim, particles) in &sizes {
         let budget = if dim == 2 { 8.0e6 } else { 2.0e6 };
         let steps = args
             .steps
             .unwrap_or(((budget / particles.max(1) as f64) as u64).clamp(3, 100));
-        for &h_over_dx in &args.h_over_dx {
+        for &h_over_dx in h_list.iter() {
             for &threads in &args.threads {
                 let config = Config {
+                    case,
                     dim,
                     particles,
                     h_over_dx,
@@ -192,7 +260,8 @@ fn print_row(row: &Value) {
     let f = |key: &str| row[key].as_f64().unwrap_or(f64::NAN);
     let share = |key: &str| 100.0 * f(key) / f("seconds_steps").max(1e-12);
     println!(
-        "{:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
+        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
+        row["case"].as_str().unwrap_or("?"),
         f("dim"),
         f("h_over_dx"),
         f("threads"),
@@ -218,16 +287,23 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         .build()
         .map_err(|e| (1, e.to_string()))?;
     let n = config.particles.max(100) as f64;
-    let (text, dx) = match config.dim {
-        2 => (bisph_io::case::DEFAULT_CASE, (WATER_AREA_2D / n).sqrt()),
-        _ => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
+    let (text, dx) = match (config.case, config.dim) {
+        (BenchCase::DamBreak, 2) => (bisph_io::case::DEFAULT_CASE, (WATER_AREA_2D / n).sqrt()),
+        (BenchCase::DamBreak, _) => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
+        _ => (bisph_io::paper2_cases::TANK, (TANK_AREA / n).sqrt()),
     };
-    let overrides = vec![
+    let mut overrides = vec![
         format!("resolution.dx={dx}"),
         format!("resolution.h_over_dx={}", config.h_over_dx),
         "time.integrator=\"verlet\"".into(),
         "output.plots=false".into(),
     ];
+    match config.case {
+        BenchCase::DamBreak => {}
+        BenchCase::TankDiscrete => overrides.push("shepard=\"discrete\"".into()),
+        BenchCase::TankGeometric => overrides.push("shepard=\"geometric\"".into()),
+        BenchCase::TankEnergy => overrides.push("boundary=\"energy\"".into()),
+    }
     let loaded = parse_case("<bench>", text, &overrides).map_err(|e| (1, e.to_string()))?;
     pool.install(|| match config.dim {
         2 => measure::<DVec2>(&loaded, config, baseline),
@@ -259,7 +335,11 @@ fn measure<V: CaseDim>(
     let t = sim.timings;
     let pairs = pairs_per_step * steps / seconds;
     Ok(json!({
-        "case": if config.dim == 2 { "dam-break-2d" } else { "dam-break-3d" },
+        "case": match (config.case, config.dim) {
+            (BenchCase::DamBreak, 2) => "dam-break-2d",
+            (BenchCase::DamBreak, _) => "dam-break-3d",
+            (other, _) => other.name(),
+        },
         "dim": config.dim, "h_over_dx": config.h_over_dx, "threads": config.threads,
         "particles": n, "wall_elements": sim.walls.elements.len(), "steps": config.steps,
         "neighbours_per_particle": pairs_per_step / n,

@@ -67,6 +67,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let mut diffusion = 0.0;
     let mut shepard = 0.0;
     let diffuse = model.diffusion.scale != 0.0;
+    let discrete_shepard = W::RENORMALISE && wall_model.needs_discrete_shepard();
     fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
         let f = kernel.gradient_factor(r);
         let grad_w = r_ij * f;
@@ -78,7 +79,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
                 .diffusion
                 .pair(rho_i, fluid.density[j], r_ij, f, volume_j);
         }
-        if W::RENORMALISE {
+        if discrete_shepard {
             shepard += kernel.value(r) * volume_j;
         }
     });

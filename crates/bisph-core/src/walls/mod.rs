@@ -307,6 +307,12 @@ pub trait WallModel<V: Vector>: Sync {
         fluid_grid: &CellGrid<V>,
     );
 
+    /// Whether [`WallModel::renormalisation`] reads the discrete sum `sum_j W_ij V_j`, so the
+    /// fluid sweep must accumulate it (one extra kernel value per pair).
+    fn needs_discrete_shepard(&self) -> bool {
+        Self::RENORMALISE
+    }
+
     /// The Shepard factor `gamma_i` that divides the operators of a particle at `x` when
     /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid.
     fn renormalisation(

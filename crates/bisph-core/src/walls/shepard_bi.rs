@@ -72,6 +72,10 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
             });
     }
 
+    fn needs_discrete_shepard(&self) -> bool {
+        self.shepard == ShepardKind::Discrete
+    }
+
     fn renormalisation(
         &self,
         kernel: &Wendland,
