@@ -244,6 +244,89 @@ impl Default for OutputSection {
     }
 }
 
+/// `[checkpoint]`: when `bisph run` saves its state for `--resume` (also on SIGINT/SIGTERM).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSection {
+    /// Write a checkpoint every this many steps (0 = not by steps).
+    #[serde(default)]
+    pub every_steps: u64,
+    /// Write a checkpoint every this many wall-clock minutes (0 = not by time).
+    #[serde(default = "default_checkpoint_minutes")]
+    pub every_minutes: f64,
+    /// Write a checkpoint when the run is interrupted by SIGINT or SIGTERM.
+    #[serde(default = "yes")]
+    pub on_signal: bool,
+}
+
+fn default_checkpoint_minutes() -> f64 {
+    10.0
+}
+
+impl Default for CheckpointSection {
+    fn default() -> Self {
+        CheckpointSection {
+            every_steps: 0,
+            every_minutes: default_checkpoint_minutes(),
+            on_signal: true,
+        }
+    }
+}
+
+/// `[diagnostics]`: divergence watches (see `bisph_io::diagnostics`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DiagnosticsSection {
+    /// Watch at all.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Smallest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_min")]
+    pub density_ratio_min: f64,
+    /// Largest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_max")]
+    pub density_ratio_max: f64,
+    /// Largest allowed particle speed over `c0`.
+    #[serde(default = "one")]
+    pub speed_over_c0: f64,
+    /// Smallest allowed time step over the first step's (0 = off).
+    #[serde(default = "default_dt_collapse")]
+    pub dt_collapse: f64,
+    /// Stop when a particle crosses a wall element.
+    #[serde(default = "yes")]
+    pub wall_crossing: bool,
+    /// Largest allowed growth of the total energy over `E_scale` (0 = off).
+    #[serde(default = "default_energy_growth")]
+    pub energy_growth: f64,
+}
+
+fn default_density_ratio_min() -> f64 {
+    0.5
+}
+fn default_density_ratio_max() -> f64 {
+    2.0
+}
+fn default_dt_collapse() -> f64 {
+    1e-3
+}
+fn default_energy_growth() -> f64 {
+    0.5
+}
+
+impl Default for DiagnosticsSection {
+    fn default() -> Self {
+        DiagnosticsSection {
+            enabled: true,
+            density_ratio_min: default_density_ratio_min(),
+            density_ratio_max: default_density_ratio_max(),
+            speed_over_c0: one(),
+            dt_collapse: default_dt_collapse(),
+            wall_crossing: true,
+            energy_growth: default_energy_growth(),
+        }
+    }
+}
+
 /// `[domain]`: particles outside stop the run.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -563,6 +646,12 @@ pub struct Case {
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
+    /// Checkpoints.
+    #[serde(default)]
+    pub checkpoint: CheckpointSection,
+    /// Divergence watches.
+    #[serde(default)]
+    pub diagnostics: DiagnosticsSection,
     /// Domain.
     pub domain: Option<DomainSection>,
     /// Fluid blocks.
