@@ -239,6 +239,75 @@ impl<V: Vector> SimState<V> {
                 e.corners.len()
             ));
         }
+        let finite_v = |v: &[V]| v.iter().all(|x| x.is_finite());
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !(finite_v(&f.velocity)
+            && finite_v(&f.acceleration)
+            && finite(&f.mass)
+            && finite(&f.pressure)
+            && finite(&f.density_rate)
+            && f.density.iter().all(|&r| r.is_finite() && r > 0.0))
+        {
+            return Err("non-finite fluid values".into());
+        }
+        let (lo, hi) = (sim.config.domain_min, sim.config.domain_max);
+        if let Some(p) = f
+            .position
+            .iter()
+            .find(|r| (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k))))
+        {
+            return Err(format!(
+                "a particle outside the domain, at {:?}",
+                p.to_xyz()
+            ));
+        }
+        if !(finite_v(&self.centre)
+            && finite_v(&self.normal)
+            && finite_v(&self.velocity)
+            && finite_v(&self.corners)
+            && finite(&self.area)
+            && finite(&self.reach)
+            && finite(&self.pressure)
+            && self.max_reach.is_finite())
+        {
+            return Err("non-finite wall element values".into());
+        }
+        // The element grid may not need far more cells than the case's own walls do.
+        let cells = |points: &[V]| -> f64 {
+            let Some(&first) = points.first() else {
+                return 0.0;
+            };
+            let (mut a, mut b) = (first, first);
+            for &p in points {
+                a = a.min_by_component(p);
+                b = b.max_by_component(p);
+            }
+            let cell = sim.walls.grid.cell_size();
+            (0..V::DIM)
+                .map(|k| (b.get(k) - a.get(k)) / cell + 1.0)
+                .product()
+        };
+        if cells(&self.centre) > 64.0 * cells(&e.centre) + 1e6 {
+            return Err("wall elements spread far beyond the case's walls".into());
+        }
+        if self
+            .pistons
+            .iter()
+            .any(|p| !(p.1.is_finite() && p.2.is_finite() && p.3.is_finite()))
+            || ![
+                self.time,
+                self.last_dt,
+                self.wall_work,
+                self.wall_power,
+                self.last_residue,
+                self.placed_at,
+            ]
+            .iter()
+            .all(|x| x.is_finite())
+            || self.time < 0.0
+        {
+            return Err("non-finite or negative scalars".into());
+        }
         let pistons: Vec<u32> = sim
             .walls
             .bodies
@@ -331,6 +400,32 @@ pub struct RunCounters {
     pub wall_seconds: f64,
     /// Step size the run started with (for the time-step collapse watch).
     pub dt0: f64,
+}
+
+impl RunCounters {
+    /// Checks that the counters fit a run at time `t` with these output intervals (so that no
+    /// loop over output times can run away on a hostile file).
+    pub fn check(&self, t: f64, series_interval: f64, vtk_interval: f64) -> Result<(), String> {
+        let near = |next: f64, interval: f64| {
+            next.is_finite() && next >= t - interval && next <= t + 2.0 * interval
+        };
+        if !near(self.next_series, series_interval) {
+            return Err(format!(
+                "next series time {} does not fit t = {t}",
+                self.next_series
+            ));
+        }
+        if vtk_interval > 0.0 && !near(self.next_frame, vtk_interval) {
+            return Err(format!(
+                "next frame time {} does not fit t = {t}",
+                self.next_frame
+            ));
+        }
+        if self.frame_times.iter().any(|x| !x.is_finite()) || !self.dt0.is_finite() {
+            return Err("non-finite frame times or first step".into());
+        }
+        Ok(())
+    }
 }
 
 /// A whole checkpoint.

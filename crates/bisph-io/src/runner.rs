@@ -317,6 +317,13 @@ pub fn run<V: CaseDim>(
         Some(c) => {
             c.sim
                 .restore(&mut sim)
+                .and_then(|_| {
+                    c.run.check(
+                        sim.time,
+                        case.output.series_interval,
+                        case.output.vtk_interval,
+                    )
+                })
                 .map_err(|reason| CheckpointError::Mismatch {
                     path: checkpoint_path.clone(),
                     reason,
