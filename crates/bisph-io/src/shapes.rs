@@ -116,7 +116,7 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
             return Ok(out);
         }
     }
-    let text = std::str::from_utf8(&bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
         format!(
             "{}: neither a binary STL (the size does not match the triangle count) nor ASCII text",
             path.display()
