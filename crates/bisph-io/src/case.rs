@@ -244,6 +244,89 @@ impl Default for OutputSection {
     }
 }
 
+/// `[checkpoint]`: when `bisph run` saves its state for `--resume` (also on SIGINT/SIGTERM).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSection {
+    /// Write a checkpoint every this many steps (0 = not by steps).
+    #[serde(default)]
+    pub every_steps: u64,
+    /// Write a checkpoint every this many wall-clock minutes (0 = not by time).
+    #[serde(default = "default_checkpoint_minutes")]
+    pub every_minutes: f64,
+    /// Write a checkpoint when the run is interrupted by SIGINT or SIGTERM.
+    #[serde(default = "yes")]
+    pub on_signal: bool,
+}
+
+fn default_checkpoint_minutes() -> f64 {
+    10.0
+}
+
+impl Default for CheckpointSection {
+    fn default() -> Self {
+        CheckpointSection {
+            every_steps: 0,
+            every_minutes: default_checkpoint_minutes(),
+            on_signal: true,
+        }
+    }
+}
+
+/// `[diagnostics]`: divergence watches (see `bisph_io::diagnostics`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DiagnosticsSection {
+    /// Watch at all.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Smallest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_min")]
+    pub density_ratio_min: f64,
+    /// Largest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_max")]
+    pub density_ratio_max: f64,
+    /// Largest allowed particle speed over `c0`.
+    #[serde(default = "one")]
+    pub speed_over_c0: f64,
+    /// Smallest allowed time step over the first step's (0 = off).
+    #[serde(default = "default_dt_collapse")]
+    pub dt_collapse: f64,
+    /// Stop when a particle crosses a wall element.
+    #[serde(default = "yes")]
+    pub wall_crossing: bool,
+    /// Largest allowed growth of the total energy over `E_scale` (0 = off).
+    #[serde(default = "default_energy_growth")]
+    pub energy_growth: f64,
+}
+
+fn default_density_ratio_min() -> f64 {
+    0.5
+}
+fn default_density_ratio_max() -> f64 {
+    2.0
+}
+fn default_dt_collapse() -> f64 {
+    1e-3
+}
+fn default_energy_growth() -> f64 {
+    0.5
+}
+
+impl Default for DiagnosticsSection {
+    fn default() -> Self {
+        DiagnosticsSection {
+            enabled: true,
+            density_ratio_min: default_density_ratio_min(),
+            density_ratio_max: default_density_ratio_max(),
+            speed_over_c0: one(),
+            dt_collapse: default_dt_collapse(),
+            wall_crossing: true,
+            energy_growth: default_energy_growth(),
+        }
+    }
+}
+
 /// `[domain]`: particles outside stop the run.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -563,6 +646,12 @@ pub struct Case {
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
+    /// Checkpoints.
+    #[serde(default)]
+    pub checkpoint: CheckpointSection,
+    /// Divergence watches.
+    #[serde(default)]
+    pub diagnostics: DiagnosticsSection,
     /// Domain.
     pub domain: Option<DomainSection>,
     /// Fluid blocks.
@@ -791,6 +880,24 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("expected a number above 1, found {}", c.fluid.tait_exponent),
         );
     }
+    if let Some(dom) = &c.domain {
+        if let Some((k, w)) = dom
+            .min
+            .iter()
+            .zip(&dom.max)
+            .map(|(a, b)| b - a)
+            .enumerate()
+            .find(|(_, w)| *w < c.resolution.dx)
+        {
+            return e(
+                "resolution.dx",
+                format!(
+                    "expected dx at most the domain's extent {w} in direction {k}, found {}",
+                    c.resolution.dx
+                ),
+            );
+        }
+    }
     if !(1.0..=4.0).contains(&c.resolution.h_over_dx) {
         return e(
             "resolution.h_over_dx",
@@ -996,16 +1103,9 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
             return e("domain", "expected min < max in every direction".into());
         }
-        if dom
-            .min
-            .iter()
-            .zip(&dom.max)
-            .all(|(a, b)| b - a < c.resolution.dx)
-        {
-            return e("resolution.dx", "dx is larger than the domain".into());
-        }
     }
     check_pack(loaded)?;
+    check_reliability(loaded)?;
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
@@ -1017,6 +1117,139 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
                     p.kind
                 ),
             );
+        }
+    }
+    Ok(())
+}
+
+/// Checks of the `[checkpoint]` and `[diagnostics]` keys, and placement checks: fluid blocks and
+/// probes inside the domain (or, without a domain, inside the box around the walls).
+fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
+    let e = |key: &str, msg: String| Err(loaded.error(key, msg));
+    let ck = &c.checkpoint;
+    if !(ck.every_minutes >= 0.0 && ck.every_minutes.is_finite()) {
+        return e(
+            "checkpoint.every_minutes",
+            format!(
+                "expected zero (off) or a positive number of minutes, found {}",
+                ck.every_minutes
+            ),
+        );
+    }
+    let g = &c.diagnostics;
+    if !(g.density_ratio_min > 0.0 && g.density_ratio_min <= 1.0) {
+        return e(
+            "diagnostics.density_ratio_min",
+            format!("expected a value in (0, 1], found {}", g.density_ratio_min),
+        );
+    }
+    if !(g.density_ratio_max >= 1.0 && g.density_ratio_max.is_finite()) {
+        return e(
+            "diagnostics.density_ratio_max",
+            format!(
+                "expected a finite value >= 1, found {}",
+                g.density_ratio_max
+            ),
+        );
+    }
+    if !(g.speed_over_c0 > 0.0 && g.speed_over_c0.is_finite()) {
+        return e(
+            "diagnostics.speed_over_c0",
+            format!("expected a positive number, found {}", g.speed_over_c0),
+        );
+    }
+    if !(0.0..1.0).contains(&g.dt_collapse) {
+        return e(
+            "diagnostics.dt_collapse",
+            format!(
+                "expected a value in [0, 1) (0 = off), found {}",
+                g.dt_collapse
+            ),
+        );
+    }
+    if !(g.energy_growth >= 0.0 && g.energy_growth.is_finite()) {
+        return e(
+            "diagnostics.energy_growth",
+            format!(
+                "expected zero (off) or a positive number, found {}",
+                g.energy_growth
+            ),
+        );
+    }
+    if let Some(dt) = c.time.min_dt {
+        if dt >= c.time.end {
+            return e(
+                "time.min_dt",
+                format!(
+                    "expected a value below time.end = {}, found {dt}",
+                    c.time.end
+                ),
+            );
+        }
+    }
+    // The region particles and probes must lie in: the domain, else the walls' bounding box.
+    let (lo, hi, region) = match &c.domain {
+        Some(dom) => (dom.min.clone(), dom.max.clone(), "the domain"),
+        None => {
+            let mut lo = vec![f64::INFINITY; d];
+            let mut hi = vec![f64::NEG_INFINITY; d];
+            let mut grow = |p: &[f64]| {
+                for k in 0..d.min(p.len()) {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            };
+            for w in &c.wall {
+                if w.shape != "box" && w.shape != "polygon" && w.shape != "polyline" {
+                    return Ok(()); // walls from files: no box known before building
+                }
+                for p in w.min.iter().chain(w.max.iter()) {
+                    grow(p);
+                }
+                for p in w.points.iter().flatten() {
+                    grow(p);
+                }
+            }
+            if lo.iter().any(|x| !x.is_finite()) {
+                return Ok(());
+            }
+            (lo, hi, "the box around the walls")
+        }
+    };
+    let outside = |p: &[f64]| {
+        p.iter()
+            .zip(lo.iter().zip(&hi))
+            .any(|(x, (a, b))| !(x >= a && x <= b))
+    };
+    let range = format!("{lo:?} to {hi:?}");
+    for (k, p) in c.probe.iter().enumerate() {
+        if p.position.len() == d && outside(&p.position) {
+            return e(
+                &format!("probe[{k}].position"),
+                format!(
+                    "expected a point inside {region}, {range}, found {:?}",
+                    p.position
+                ),
+            );
+        }
+    }
+    if c.domain.is_some() {
+        for (k, b) in c.fluid_block.iter().enumerate() {
+            let corners: Vec<&Vec<f64>> = match (&b.min, &b.max, &b.points) {
+                (Some(a), Some(z), _) if b.shape == "box" => vec![a, z],
+                (_, _, Some(pts)) if b.shape == "polygon" => pts.iter().collect(),
+                _ => continue,
+            };
+            if let Some(p) = corners.iter().find(|p| p.len() == d && outside(p)) {
+                return e(
+                    &format!("fluid_block[{k}]"),
+                    format!(
+                        "expected the block inside {region}, {range}; its corner {p:?} is outside"
+                    ),
+                );
+            }
         }
     }
     Ok(())

@@ -6,6 +6,8 @@
 
 pub mod build;
 pub mod case;
+pub mod checkpoint;
+pub mod diagnostics;
 pub mod output;
 pub mod pack;
 pub mod pack_cases;
@@ -13,6 +15,7 @@ pub mod paper1_cases;
 pub mod paper2_cases;
 pub mod plot;
 pub mod regions;
+pub mod resources;
 pub mod runner;
 pub mod shapes;
 pub mod shepard;
@@ -20,4 +23,4 @@ pub mod validate;
 pub mod vtk;
 
 pub use case::{load_case, parse_case, Case, CaseError, LoadedCase};
-pub use runner::{run_case, Progress, RunError, Summary};
+pub use runner::{resume_case, run_case, run_case_with, Progress, RunError, RunOptions, Summary};

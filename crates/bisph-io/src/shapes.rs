@@ -17,6 +17,11 @@ fn fields(line: &str) -> impl Iterator<Item = &str> {
 fn read_rows(path: &Path, min_cols: usize) -> Result<Vec<Vec<Vec<f64>>>, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    parse_rows(&text, path, min_cols)
+}
+
+/// [`read_rows`] on text already read; `path` names the source in messages.
+pub fn parse_rows(text: &str, path: &Path, min_cols: usize) -> Result<Vec<Vec<Vec<f64>>>, String> {
     let mut groups: Vec<Vec<Vec<f64>>> = vec![Vec::new()];
     let mut seen_data = false;
     for (n, raw) in text.lines().enumerate() {
@@ -74,6 +79,23 @@ pub fn read_particles(path: &Path, dim: usize) -> Result<Vec<Vec<f64>>, String> 
 /// Reads an STL file, binary or ASCII, as a triangle soup.
 pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let triangles = parse_stl(&bytes, path)?;
+    if let Some(k) = triangles
+        .iter()
+        .position(|t| t.iter().any(|v| !v.is_finite()))
+    {
+        return Err(format!(
+            "{}: triangle {} has a non-finite coordinate",
+            path.display(),
+            k + 1
+        ));
+    }
+    Ok(triangles)
+}
+
+/// Parses STL bytes (binary or ASCII); `path` names the source in messages. The triangle count
+/// of a binary file is trusted only when the file's size matches it.
+pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
     let binary_size = |n: usize| 84 + 50 * n;
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
@@ -94,7 +116,7 @@ pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
             return Ok(out);
         }
     }
-    let text = std::str::from_utf8(&bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
         format!(
             "{}: neither a binary STL (the size does not match the triangle count) nor ASCII text",
             path.display()
