@@ -23,8 +23,13 @@ pub trait CaseDim: Vector + WallIntegrals {
         dx: f64,
         element_size: f64,
     ) -> Result<BlockRegion<Self>, CaseError>;
-    /// Boundary elements of one `[[wall]]` of about `size`.
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>>;
+    /// Boundary elements of one `[[wall]]` (`key`) of about `size`.
+    fn wall_shapes(
+        loaded: &LoadedCase,
+        key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError>;
     /// Lattice points of one `[[fluid_block]]`.
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self>;
 }
@@ -54,12 +59,17 @@ impl CaseDim for DVec2 {
             element_size,
         )
     }
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
-        match wall.shape.as_str() {
+    fn wall_shapes(
+        _loaded: &LoadedCase,
+        _key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
+        Ok(match wall.shape.as_str() {
             "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
             "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
             _ => geometry::polyline_elements(&points2(&wall.points), false, size),
-        }
+        })
     }
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
         match block.shape.as_str() {
@@ -86,8 +96,21 @@ impl CaseDim for DVec3 {
             element_size,
         )
     }
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
-        geometry::box_elements_3d(vec3(&wall.min), vec3(&wall.max), &wall.open, size)
+    fn wall_shapes(
+        loaded: &LoadedCase,
+        key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
+        match wall.shape.as_str() {
+            "mesh" | "capsule" => crate::mesh_walls::wall_elements(loaded, key, wall, size),
+            _ => Ok(geometry::box_elements_3d(
+                vec3(&wall.min),
+                vec3(&wall.max),
+                &wall.open,
+                size,
+            )),
+        }
     }
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
         geometry::lattice_box(vec3(&block.min), vec3(&block.max), dx)
@@ -215,7 +238,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             None => 0,
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
         };
-        let shapes = V::wall_shapes(w, element_size);
+        let shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
         if shapes.is_empty() {
             return Err(loaded.error(
                 &format!("wall[{k}]"),

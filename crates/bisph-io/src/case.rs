@@ -437,8 +437,30 @@ pub struct PackSection {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
-    /// `"box"`, `"polyline"` or `"polygon"` (2-D).
+    /// `"box"`, `"polyline"` or `"polygon"` (2-D); `"mesh"` (an STL or OBJ file) or
+    /// `"capsule"` (3-D).
     pub shape: String,
+    /// Mesh file (`.stl`, binary or ASCII, or `.obj`), relative to the case file's folder.
+    pub file: Option<String>,
+    /// Length unit of the mesh file: `"m"` (default), `"cm"` or `"mm"`.
+    pub units: Option<String>,
+    /// Uniform scale of a mesh or capsule (after units).
+    pub scale: Option<f64>,
+    /// Rotation of a mesh or capsule in degrees, about x, then y, then z (after scaling).
+    pub rotate: Option<Angles>,
+    /// Translation of a mesh or capsule, applied last.
+    pub translate: Option<Vec<f64>>,
+    /// Which side of a closed mesh the fluid is on: `"inside"` (a tank, default) or
+    /// `"outside"` (an obstacle or a floating body). Closed meshes are oriented automatically.
+    pub fluid: Option<String>,
+    /// A mesh must be closed (every edge shared by two faces; default `true`). An open mesh
+    /// (e.g. a tank without a lid) keeps the normals of its corner order, flipped with `flip`.
+    pub closed: Option<bool>,
+    /// Flip the normals of an open mesh.
+    #[serde(default)]
+    pub flip: bool,
+    /// Dimensions of a `"capsule"` wall.
+    pub capsule: Option<CapsuleSpec>,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
@@ -452,6 +474,23 @@ pub struct WallSpec {
     pub body: Option<String>,
     /// Stretch with a piston (the wall must lie along the piston axis).
     pub stretch: Option<StretchSpec>,
+}
+
+/// `capsule` of a `[[wall]]`: an Apollo-like capsule (paper 1, 5.4), axis `+z`, heat-shield
+/// apex at the origin before the wall's transform.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CapsuleSpec {
+    /// Radius of the spherical heat shield [m].
+    pub heat_shield_radius: f64,
+    /// Largest diameter [m].
+    pub diameter: f64,
+    /// Radius of the toroidal shoulder [m].
+    pub shoulder_radius: f64,
+    /// Half-angle of the conical afterbody [degrees].
+    pub cone_half_angle: f64,
+    /// Height from the heat-shield apex to the top [m].
+    pub height: f64,
 }
 
 /// `[body.motion]`: prescribed motion (see `PrescribedMotion`).
@@ -923,7 +962,11 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
-        shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+        if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
+            crate::mesh_walls::check_wall(loaded, &key, w)?;
+        } else {
+            shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+        }
         let sides: &[&str] = if d == 2 {
             &bisph_core::geometry::BOX_SIDES_2D
         } else {
@@ -1076,7 +1119,7 @@ fn shape_points(
             let allowed = if d == 2 {
                 "\"box\", \"polygon\" or \"polyline\""
             } else {
-                "\"box\""
+                "\"box\", \"mesh\" or \"capsule\""
             };
             Err(loaded.error(
                 &format!("{key}.shape"),

@@ -6,6 +6,7 @@
 
 pub mod build;
 pub mod case;
+pub mod mesh_walls;
 pub mod output;
 pub mod pack;
 pub mod pack_cases;
