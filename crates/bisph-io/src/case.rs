@@ -548,6 +548,39 @@ pub struct BodySpec {
     pub motion: Option<MotionSpec>,
     /// Piston dynamics (instead of a prescribed motion).
     pub piston: Option<PistonSpec>,
+    /// Free rigid-body dynamics (instead of a prescribed motion or a piston).
+    pub free: Option<FreeSpec>,
+}
+
+/// `[body.free]`: a free rigid body driven by the fluid and gravity. `body.centre` is its
+/// centre of mass (computed from its closed mesh walls when left out).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct FreeSpec {
+    /// Mass [kg] (per unit depth in 2-D). With `density` instead, computed from the body's
+    /// closed mesh walls.
+    pub mass: Option<f64>,
+    /// Uniform density of the solid, for mass and inertia from the body's closed mesh walls.
+    pub density: Option<f64>,
+    /// Inertia about the centre of mass in body axes: 3 principal moments, or 9 numbers
+    /// (row by row) in 3-D; 1 number (`I_zz`) in 2-D. Left out: from the mesh walls
+    /// (uniform density).
+    pub inertia: Option<Vec<f64>>,
+    /// Body axes at time zero: rotation in degrees about x, then y, then z (3-D) or one angle
+    /// (2-D) from the world axes.
+    pub rotate: Option<Angles>,
+    /// Initial velocity of the centre of mass.
+    pub velocity: Option<Vec<f64>>,
+    /// Initial angular velocity in body axes (3-D) or about z (2-D, one number).
+    pub angular_velocity: Option<Vec<f64>>,
+    /// Locked translations (world axes: "x", "y", "z"); they keep their initial velocity.
+    #[serde(default)]
+    pub lock_translation: Vec<String>,
+    /// Locked rotations (body axes: "x", "y", "z"); they keep their initial rate.
+    #[serde(default)]
+    pub lock_rotation: Vec<String>,
+    /// `"iterated"` (default: inside the midpoint iterations) or `"staggered"`.
+    pub coupling: Option<String>,
 }
 
 /// `stretch` of a `[[wall]]`: the wall stretches with a piston between a fixed anchor and the
@@ -966,6 +999,14 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             crate::mesh_walls::check_wall(loaded, &key, w)?;
         } else {
             shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+            if let Some(f) = &w.fluid {
+                if w.shape != "box" || (f != "inside" && f != "outside") {
+                    return e(
+                        &format!("{key}.fluid"),
+                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape),
+                    );
+                }
+            }
         }
         let sides: &[&str] = if d == 2 {
             &bisph_core::geometry::BOX_SIDES_2D
@@ -999,6 +1040,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
+        }
+        if let Some(fs) = &b.free {
+            if b.motion.is_some() || b.piston.is_some() {
+                return e(
+                    &format!("{key}.free"),
+                    "a body has one of motion, piston or free, not several".into(),
+                );
+            }
+            check_free(loaded, &key, fs, d)?;
         }
         if let Some(p) = &b.piston {
             if b.motion.is_some() {
@@ -1059,6 +1109,96 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
                     "expected \"pressure\" or \"wall_pressure\", found \"{}\"",
                     p.kind
                 ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Checks a `[body.free]` table.
+fn check_free(loaded: &LoadedCase, key: &str, f: &FreeSpec, d: usize) -> Result<(), CaseError> {
+    let key = format!("{key}.free");
+    let err = |k: &str, m: String| Err(loaded.error(&format!("{key}.{k}"), m));
+    for (name, v) in [("mass", f.mass), ("density", f.density)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return err(name, format!("expected a positive number, found {v}"));
+            }
+        }
+    }
+    if f.mass.is_some() && f.density.is_some() {
+        return err("density", "give mass or density, not both".into());
+    }
+    if f.mass.is_none() && f.density.is_none() {
+        return err(
+            "mass",
+            "missing: a mass (or a density with closed mesh walls)".into(),
+        );
+    }
+    if d == 2 && (f.inertia.is_none() || f.mass.is_none()) {
+        return err(
+            "inertia",
+            "a 2-D body needs its mass and inertia (I_zz)".into(),
+        );
+    }
+    if let Some(i) = &f.inertia {
+        let ok = if d == 2 {
+            i.len() == 1
+        } else {
+            i.len() == 3 || i.len() == 9
+        };
+        if !ok || i.iter().any(|x| !x.is_finite()) {
+            return err(
+                "inertia",
+                format!(
+                    "expected {}, found {} values",
+                    if d == 2 {
+                        "1 value (I_zz)"
+                    } else {
+                        "3 principal moments or 9 values"
+                    },
+                    i.len()
+                ),
+            );
+        }
+        let diagonal: Vec<f64> = if i.len() == 9 {
+            vec![i[0], i[4], i[8]]
+        } else {
+            i.clone()
+        };
+        if diagonal.iter().any(|x| *x <= 0.0) {
+            return err("inertia", "expected positive moments of inertia".into());
+        }
+    }
+    if let Some(v) = &f.velocity {
+        vector(loaded, &format!("{key}.velocity"), v, d)?;
+    }
+    if let Some(w) = &f.angular_velocity {
+        vector(
+            loaded,
+            &format!("{key}.angular_velocity"),
+            w,
+            if d == 2 { 1 } else { 3 },
+        )?;
+    }
+    for (name, list) in [
+        ("lock_translation", &f.lock_translation),
+        ("lock_rotation", &f.lock_rotation),
+    ] {
+        for a in list {
+            if !["x", "y", "z"].contains(&a.as_str()) {
+                return err(
+                    name,
+                    format!("expected axes among \"x\", \"y\", \"z\", found \"{a}\""),
+                );
+            }
+        }
+    }
+    if let Some(c) = &f.coupling {
+        if c != "iterated" && c != "staggered" {
+            return err(
+                "coupling",
+                format!("expected \"iterated\" or \"staggered\", found \"{c}\""),
             );
         }
     }

@@ -4,6 +4,7 @@
 //! named errors, building a simulation from a case, VTK/CSV/JSON outputs, plots, and the run
 //! loop of `bisph run`.
 
+pub mod bodies_out;
 pub mod build;
 pub mod case;
 pub mod mesh_walls;
@@ -14,6 +15,7 @@ pub mod paper1_cases;
 pub mod paper2_cases;
 pub mod plot;
 pub mod regions;
+pub mod rigid_cases;
 pub mod runner;
 pub mod shapes;
 pub mod shepard;

@@ -86,6 +86,16 @@ pub struct Summary {
     pub threads: usize,
     /// VTK frames written.
     pub frames: usize,
+    /// Free bodies: largest `|E_fluid + E_bodies - (same at 0)| / E_scale` over the run, with
+    /// `E_bodies` their kinetic (translation + rotation) and gravity energy; absent without
+    /// free bodies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_max_relative: Option<f64>,
+    /// Free bodies: the same at the end of the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_relative: Option<f64>,
+    /// Fluid particles behind a wall (inside a body or through a wall) at the end.
+    pub particles_behind_walls: usize,
     /// Why the run stopped early (absent when it reached its end).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
@@ -174,6 +184,23 @@ pub fn run<V: CaseDim>(
         )?),
         false => None,
     };
+    let mut free_csv = Vec::new();
+    for b in &sim.walls.bodies {
+        if matches!(b.motion, Motion::Free(_)) {
+            free_csv.push(Series::create(
+                out.join(format!("body_{}.csv", b.name)),
+                &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
+            )?);
+        }
+    }
+    let has_free = !free_csv.is_empty();
+    let body_energy = |sim: &Simulation<V>| {
+        let e = sim.energy();
+        let (k, p) = sim.walls.body_energy();
+        e.kinetic + e.compressible + e.potential + k + p
+    };
+    let fluid_body0 = body_energy(&sim);
+    let mut fluid_body_max: f64 = 0.0;
     let midpoint = match sim.config.integrator {
         bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
         bisph_core::simulation::Integrator::Verlet => None,
@@ -221,6 +248,22 @@ pub fn run<V: CaseDim>(
                     values.extend(V::angular_to_vec(moment));
                 }
                 forces_csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
+            }
+            if has_free {
+                let loads = sim.walls.body_loads(t);
+                let mut k = 0;
+                for (b, body) in sim.walls.bodies.iter().enumerate() {
+                    if let Motion::Free(f) = &body.motion {
+                        let centre = body.centre + body.motion.kinematics(t).displacement;
+                        let row = crate::bodies_out::free_body_row::<V>(
+                            t, f, centre, loads[b].0, loads[b].1,
+                        );
+                        free_csv[k].row(&row)?;
+                        k += 1;
+                    }
+                }
+                fluid_body_max =
+                    fluid_body_max.max((body_energy(&sim) - fluid_body0).abs() / scale);
             }
             if let Some(csv) = bodies_csv.as_mut() {
                 for b in &sim.walls.bodies {
@@ -305,6 +348,12 @@ pub fn run<V: CaseDim>(
         unconverged_steps: unconverged,
         threads: rayon::current_num_threads(),
         frames: frames.count(),
+        fluid_body_energy_drift_max_relative: has_free.then_some(fluid_body_max),
+        fluid_body_energy_drift_relative: has_free
+            .then(|| (body_energy(&sim) - fluid_body0) / scale),
+        particles_behind_walls: sim
+            .walls
+            .count_behind(&sim.fluid.position, sim.config.kernel.support),
         stopped: stopped.as_ref().map(|e| e.to_string()),
     };
     let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
