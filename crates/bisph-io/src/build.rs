@@ -412,10 +412,10 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         .iter()
         .map(|p| Probe {
             name: p.name.clone(),
-            kind: if p.kind == "wall_pressure" {
-                ProbeKind::WallPressure
-            } else {
-                ProbeKind::Pressure
+            kind: match p.kind.as_str() {
+                "wall_pressure" => ProbeKind::WallPressure,
+                "height" => ProbeKind::Height,
+                _ => ProbeKind::Pressure,
             },
             position: V::from_slice(&p.position),
         })

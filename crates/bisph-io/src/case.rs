@@ -600,7 +600,8 @@ pub struct StretchSpec {
 pub struct ProbeSpec {
     /// Column name.
     pub name: String,
-    /// `"pressure"` (fluid, Shepard-normalised) or `"wall_pressure"` (`2 sum p W V`).
+    /// `"pressure"` (fluid, Shepard-normalised), `"wall_pressure"` (`2 sum p W V`) or
+    /// `"height"` (water height of the vertical column through the position).
     pub kind: String,
     /// Position.
     pub position: Vec<f64>,
@@ -1102,11 +1103,11 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
-        if p.kind != "pressure" && p.kind != "wall_pressure" {
+        if p.kind != "pressure" && p.kind != "wall_pressure" && p.kind != "height" {
             return e(
                 &format!("{key}.kind"),
                 format!(
-                    "expected \"pressure\" or \"wall_pressure\", found \"{}\"",
+                    "expected \"pressure\", \"wall_pressure\" or \"height\", found \"{}\"",
                     p.kind
                 ),
             );

@@ -19,6 +19,7 @@ pub mod rigid_cases;
 pub mod runner;
 pub mod shapes;
 pub mod shepard;
+pub mod spheric2;
 pub mod validate;
 pub mod vtk;
 

@@ -9,7 +9,10 @@ use std::path::Path;
 
 /// The rigid-body and mesh-wall validation cases.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
-    vec![Box::new(FloatingBox)]
+    vec![
+        Box::new(FloatingBox),
+        Box::new(crate::spheric2::SphericTest2),
+    ]
 }
 
 /// Mean of `y` where `t` lies in `[a, b]`.
