@@ -237,6 +237,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     let mut body_surfaces: Vec<(usize, bisph_core::surface::Surface)> = Vec::new();
     let element_size = dx * case.resolution.element_over_dx;
     for (k, w) in case.wall.iter().enumerate() {
+        let element_size = w.element_size.unwrap_or(element_size);
         let body = match &w.body {
             None => 0,
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,

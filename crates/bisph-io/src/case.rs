@@ -461,6 +461,9 @@ pub struct WallSpec {
     pub flip: bool,
     /// Dimensions of a `"capsule"` wall.
     pub capsule: Option<CapsuleSpec>,
+    /// Size of this wall's elements (default `resolution.dx * resolution.element_over_dx`),
+    /// e.g. a finely meshed body in a coarse tank.
+    pub element_size: Option<f64>,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
@@ -996,6 +999,9 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
+        if let Some(size) = w.element_size {
+            positive(&format!("{key}.element_size"), size)?;
+        }
         if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
             crate::mesh_walls::check_wall(loaded, &key, w)?;
         } else {

@@ -4,6 +4,7 @@
 //! named errors, building a simulation from a case, VTK/CSV/JSON outputs, plots, and the run
 //! loop of `bisph run`.
 
+pub mod apollo;
 pub mod bodies_out;
 pub mod build;
 pub mod case;

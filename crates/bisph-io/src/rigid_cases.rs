@@ -12,6 +12,7 @@ pub fn cases() -> Vec<Box<dyn ValidationCase>> {
     vec![
         Box::new(FloatingBox),
         Box::new(crate::spheric2::SphericTest2),
+        Box::new(Apollo),
     ]
 }
 
@@ -151,5 +152,23 @@ impl ValidationCase for FloatingBox {
             )],
             wall_seconds: 0.0,
         })
+    }
+}
+
+/// Apollo capsule water landing (paper 1, 5.4).
+pub struct Apollo;
+
+impl ValidationCase for Apollo {
+    fn name(&self) -> &'static str {
+        "apollo"
+    }
+    fn description(&self) -> &'static str {
+        "paper 1, 5.4: Apollo capsule water landing, free 6-DOF body; no particle inside, fluid + body energy drift with the body inside the iterations vs staggered"
+    }
+    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
+        crate::apollo::run_apollo(self.name(), quick, out)
+    }
+    fn in_quick_suite(&self) -> bool {
+        false
     }
 }
