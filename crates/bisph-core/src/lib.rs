@@ -23,6 +23,7 @@ pub mod probes;
 pub mod quadrature;
 pub mod region;
 pub mod simulation;
+pub mod surface;
 pub mod terms;
 pub mod walls;
 

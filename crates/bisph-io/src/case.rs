@@ -520,8 +520,33 @@ pub struct PackSection {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
-    /// `"box"`, `"polyline"` or `"polygon"` (2-D).
+    /// `"box"`, `"polyline"` or `"polygon"` (2-D); `"mesh"` (an STL or OBJ file) or
+    /// `"capsule"` (3-D).
     pub shape: String,
+    /// Mesh file (`.stl`, binary or ASCII, or `.obj`), relative to the case file's folder.
+    pub file: Option<String>,
+    /// Length unit of the mesh file: `"m"` (default), `"cm"` or `"mm"`.
+    pub units: Option<String>,
+    /// Uniform scale of a mesh or capsule (after units).
+    pub scale: Option<f64>,
+    /// Rotation of a mesh or capsule in degrees, about x, then y, then z (after scaling).
+    pub rotate: Option<Angles>,
+    /// Translation of a mesh or capsule, applied last.
+    pub translate: Option<Vec<f64>>,
+    /// Which side of a closed mesh the fluid is on: `"inside"` (a tank, default) or
+    /// `"outside"` (an obstacle or a floating body). Closed meshes are oriented automatically.
+    pub fluid: Option<String>,
+    /// A mesh must be closed (every edge shared by two faces; default `true`). An open mesh
+    /// (e.g. a tank without a lid) keeps the normals of its corner order, flipped with `flip`.
+    pub closed: Option<bool>,
+    /// Flip the normals of an open mesh.
+    #[serde(default)]
+    pub flip: bool,
+    /// Dimensions of a `"capsule"` wall.
+    pub capsule: Option<CapsuleSpec>,
+    /// Size of this wall's elements (default `resolution.dx * resolution.element_over_dx`),
+    /// e.g. a finely meshed body in a coarse tank.
+    pub element_size: Option<f64>,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
@@ -535,6 +560,23 @@ pub struct WallSpec {
     pub body: Option<String>,
     /// Stretch with a piston (the wall must lie along the piston axis).
     pub stretch: Option<StretchSpec>,
+}
+
+/// `capsule` of a `[[wall]]`: an Apollo-like capsule (paper 1, 5.4), axis `+z`, heat-shield
+/// apex at the origin before the wall's transform.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CapsuleSpec {
+    /// Radius of the spherical heat shield [m].
+    pub heat_shield_radius: f64,
+    /// Largest diameter [m].
+    pub diameter: f64,
+    /// Radius of the toroidal shoulder [m].
+    pub shoulder_radius: f64,
+    /// Half-angle of the conical afterbody [degrees].
+    pub cone_half_angle: f64,
+    /// Height from the heat-shield apex to the top [m].
+    pub height: f64,
 }
 
 /// `[body.motion]`: prescribed motion (see `PrescribedMotion`).
@@ -592,6 +634,39 @@ pub struct BodySpec {
     pub motion: Option<MotionSpec>,
     /// Piston dynamics (instead of a prescribed motion).
     pub piston: Option<PistonSpec>,
+    /// Free rigid-body dynamics (instead of a prescribed motion or a piston).
+    pub free: Option<FreeSpec>,
+}
+
+/// `[body.free]`: a free rigid body driven by the fluid and gravity. `body.centre` is its
+/// centre of mass (computed from its closed mesh walls when left out).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct FreeSpec {
+    /// Mass [kg] (per unit depth in 2-D). With `density` instead, computed from the body's
+    /// closed mesh walls.
+    pub mass: Option<f64>,
+    /// Uniform density of the solid, for mass and inertia from the body's closed mesh walls.
+    pub density: Option<f64>,
+    /// Inertia about the centre of mass in body axes: 3 principal moments, or 9 numbers
+    /// (row by row) in 3-D; 1 number (`I_zz`) in 2-D. Left out: from the mesh walls
+    /// (uniform density).
+    pub inertia: Option<Vec<f64>>,
+    /// Body axes at time zero: rotation in degrees about x, then y, then z (3-D) or one angle
+    /// (2-D) from the world axes.
+    pub rotate: Option<Angles>,
+    /// Initial velocity of the centre of mass.
+    pub velocity: Option<Vec<f64>>,
+    /// Initial angular velocity in body axes (3-D) or about z (2-D, one number).
+    pub angular_velocity: Option<Vec<f64>>,
+    /// Locked translations (world axes: "x", "y", "z"); they keep their initial velocity.
+    #[serde(default)]
+    pub lock_translation: Vec<String>,
+    /// Locked rotations (body axes: "x", "y", "z"); they keep their initial rate.
+    #[serde(default)]
+    pub lock_rotation: Vec<String>,
+    /// `"iterated"` (default: inside the midpoint iterations) or `"staggered"`.
+    pub coupling: Option<String>,
 }
 
 /// `stretch` of a `[[wall]]`: the wall stretches with a piston between a fixed anchor and the
@@ -611,7 +686,8 @@ pub struct StretchSpec {
 pub struct ProbeSpec {
     /// Column name.
     pub name: String,
-    /// `"pressure"` (fluid, Shepard-normalised) or `"wall_pressure"` (`2 sum p W V`).
+    /// `"pressure"` (fluid, Shepard-normalised), `"wall_pressure"` (`2 sum p W V`) or
+    /// `"height"` (water height of the vertical column through the position).
     pub kind: String,
     /// Position.
     pub position: Vec<f64>,
@@ -1030,7 +1106,22 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
-        shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+        if let Some(size) = w.element_size {
+            positive(&format!("{key}.element_size"), size)?;
+        }
+        if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
+            crate::mesh_walls::check_wall(loaded, &key, w)?;
+        } else {
+            shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+            if let Some(f) = &w.fluid {
+                if w.shape != "box" || (f != "inside" && f != "outside") {
+                    return e(
+                        &format!("{key}.fluid"),
+                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape),
+                    );
+                }
+            }
+        }
         let sides: &[&str] = if d == 2 {
             &bisph_core::geometry::BOX_SIDES_2D
         } else {
@@ -1063,6 +1154,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
+        }
+        if let Some(fs) = &b.free {
+            if b.motion.is_some() || b.piston.is_some() {
+                return e(
+                    &format!("{key}.free"),
+                    "a body has one of motion, piston or free, not several".into(),
+                );
+            }
+            check_free(loaded, &key, fs, d)?;
         }
         if let Some(p) = &b.piston {
             if b.motion.is_some() {
@@ -1109,11 +1209,11 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
-        if p.kind != "pressure" && p.kind != "wall_pressure" {
+        if p.kind != "pressure" && p.kind != "wall_pressure" && p.kind != "height" {
             return e(
                 &format!("{key}.kind"),
                 format!(
-                    "expected \"pressure\" or \"wall_pressure\", found \"{}\"",
+                    "expected \"pressure\", \"wall_pressure\" or \"height\", found \"{}\"",
                     p.kind
                 ),
             );
@@ -1255,6 +1355,96 @@ fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// Checks a `[body.free]` table.
+fn check_free(loaded: &LoadedCase, key: &str, f: &FreeSpec, d: usize) -> Result<(), CaseError> {
+    let key = format!("{key}.free");
+    let err = |k: &str, m: String| Err(loaded.error(&format!("{key}.{k}"), m));
+    for (name, v) in [("mass", f.mass), ("density", f.density)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return err(name, format!("expected a positive number, found {v}"));
+            }
+        }
+    }
+    if f.mass.is_some() && f.density.is_some() {
+        return err("density", "give mass or density, not both".into());
+    }
+    if f.mass.is_none() && f.density.is_none() {
+        return err(
+            "mass",
+            "missing: a mass (or a density with closed mesh walls)".into(),
+        );
+    }
+    if d == 2 && (f.inertia.is_none() || f.mass.is_none()) {
+        return err(
+            "inertia",
+            "a 2-D body needs its mass and inertia (I_zz)".into(),
+        );
+    }
+    if let Some(i) = &f.inertia {
+        let ok = if d == 2 {
+            i.len() == 1
+        } else {
+            i.len() == 3 || i.len() == 9
+        };
+        if !ok || i.iter().any(|x| !x.is_finite()) {
+            return err(
+                "inertia",
+                format!(
+                    "expected {}, found {} values",
+                    if d == 2 {
+                        "1 value (I_zz)"
+                    } else {
+                        "3 principal moments or 9 values"
+                    },
+                    i.len()
+                ),
+            );
+        }
+        let diagonal: Vec<f64> = if i.len() == 9 {
+            vec![i[0], i[4], i[8]]
+        } else {
+            i.clone()
+        };
+        if diagonal.iter().any(|x| *x <= 0.0) {
+            return err("inertia", "expected positive moments of inertia".into());
+        }
+    }
+    if let Some(v) = &f.velocity {
+        vector(loaded, &format!("{key}.velocity"), v, d)?;
+    }
+    if let Some(w) = &f.angular_velocity {
+        vector(
+            loaded,
+            &format!("{key}.angular_velocity"),
+            w,
+            if d == 2 { 1 } else { 3 },
+        )?;
+    }
+    for (name, list) in [
+        ("lock_translation", &f.lock_translation),
+        ("lock_rotation", &f.lock_rotation),
+    ] {
+        for a in list {
+            if !["x", "y", "z"].contains(&a.as_str()) {
+                return err(
+                    name,
+                    format!("expected axes among \"x\", \"y\", \"z\", found \"{a}\""),
+                );
+            }
+        }
+    }
+    if let Some(c) = &f.coupling {
+        if c != "iterated" && c != "staggered" {
+            return err(
+                "coupling",
+                format!("expected \"iterated\" or \"staggered\", found \"{c}\""),
+            );
+        }
+    }
+    Ok(())
+}
+
 fn vector(loaded: &LoadedCase, key: &str, v: &[f64], d: usize) -> Result<(), CaseError> {
     if v.len() != d {
         return Err(loaded.error(key, format!("expected {d} numbers, found {}", v.len())));
@@ -1309,7 +1499,7 @@ fn shape_points(
             let allowed = if d == 2 {
                 "\"box\", \"polygon\" or \"polyline\""
             } else {
-                "\"box\""
+                "\"box\", \"mesh\" or \"capsule\""
             };
             Err(loaded.error(
                 &format!("{key}.shape"),

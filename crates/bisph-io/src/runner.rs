@@ -171,6 +171,16 @@ pub struct Summary {
     /// Step this session resumed from (absent for a fresh run).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resumed_from_step: Option<u64>,
+    /// Free bodies: largest `|E_fluid + E_bodies - (same at 0)| / E_scale` over the run, with
+    /// `E_bodies` their kinetic (translation + rotation) and gravity energy; absent without
+    /// free bodies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_max_relative: Option<f64>,
+    /// Free bodies: the same at the end of the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_relative: Option<f64>,
+    /// Fluid particles behind a wall (inside a body or through a wall) at the end.
+    pub particles_behind_walls: usize,
     /// Why the run stopped early (absent when it reached its end).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
@@ -336,6 +346,34 @@ pub fn run<V: CaseDim>(
         }),
         midpoint.map(|_| ["t", "iterations", "residue"].map(String::from).to_vec()),
     ];
+    // Free bodies: one CSV each, and the fluid + bodies energy watched for the summary.
+    let mut free_csv = Vec::new();
+    let has_free = sim
+        .walls
+        .bodies
+        .iter()
+        .any(|b| matches!(b.motion, Motion::Free(_)));
+    if has_free && resumed.is_some() {
+        return Err(RunError::Checkpoint(CheckpointError::Mismatch {
+            path: checkpoint_path.clone(),
+            reason: "resuming a run with free bodies is not supported yet".into(),
+        }));
+    }
+    for b in &sim.walls.bodies {
+        if matches!(b.motion, Motion::Free(_)) {
+            free_csv.push(Series::create(
+                out.join(format!("body_{}.csv", b.name)),
+                &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
+            )?);
+        }
+    }
+    let body_energy = |sim: &Simulation<V>| {
+        let e = sim.energy();
+        let (k, p) = sim.walls.body_energy();
+        e.kinetic + e.compressible + e.potential + k + p
+    };
+    let fluid_body0 = body_energy(&sim);
+    let mut fluid_body_max: f64 = 0.0;
 
     let mut counters;
     let mut history: Vec<[f64; 6]>;
@@ -477,6 +515,22 @@ pub fn run<V: CaseDim>(
                     csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
                 }
             }
+            if has_free {
+                let loads = sim.walls.body_loads(t);
+                let mut k = 0;
+                for (b, body) in sim.walls.bodies.iter().enumerate() {
+                    if let Motion::Free(f) = &body.motion {
+                        let centre = body.centre + body.motion.kinematics(t).displacement;
+                        let row = crate::bodies_out::free_body_row::<V>(
+                            t, f, centre, loads[b].0, loads[b].1,
+                        );
+                        free_csv[k].row(&row)?;
+                        k += 1;
+                    }
+                }
+                fluid_body_max =
+                    fluid_body_max.max((body_energy(&sim) - fluid_body0).abs() / counters.scale);
+            }
             if let Some(csv) = outputs.get(BODIES) {
                 for b in &sim.walls.bodies {
                     if let Motion::Piston(p) = b.motion {
@@ -611,6 +665,12 @@ pub fn run<V: CaseDim>(
         frames: frames.count(),
         checkpoints,
         resumed_from_step,
+        fluid_body_energy_drift_max_relative: has_free.then_some(fluid_body_max),
+        fluid_body_energy_drift_relative: has_free
+            .then(|| (body_energy(&sim) - fluid_body0) / counters.scale),
+        particles_behind_walls: sim
+            .walls
+            .count_behind(&sim.fluid.position, sim.config.kernel.support),
         stopped: match (&trip, interrupted) {
             (Some(d), _) => Some(d.to_string()),
             (None, true) => Some("interrupted by a signal; resume with --resume".into()),

@@ -315,10 +315,17 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
         .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
     let mut reports = Vec::new();
     let mut failed = Vec::new();
-    for case in cases
-        .iter()
-        .filter(|c| args.names.is_empty() || args.names.iter().any(|n| n == c.name()))
-    {
+    for case in cases.iter().filter(|c| {
+        if args.names.is_empty() && args.quick && !c.in_quick_suite() {
+            eprintln!(
+                "skipping {} in --quick (full only; `bisph validate --quick {}` runs its reduced variant)",
+                c.name(),
+                c.name()
+            );
+            return false;
+        }
+        args.names.is_empty() || args.names.iter().any(|n| n == c.name())
+    }) {
         eprintln!(
             "validating {} ({})",
             case.name(),

@@ -167,7 +167,7 @@ impl<V: Vector> Simulation<V> {
         sim.scratch.velocity = sim.fluid.velocity.clone();
         sim.scratch.density = sim.fluid.density.clone();
         sim.evaluate_rates();
-        sim.store_piston_accelerations();
+        sim.store_body_accelerations(true);
         sim.refresh_pressure();
         sim
     }
@@ -192,14 +192,11 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
-    /// Pistons' accelerations from the wall pressures of the last rate evaluation.
-    pub(crate) fn store_piston_accelerations(&mut self) {
-        let acc = self.walls.piston_accelerations();
-        for (body, a) in self.walls.bodies.iter_mut().zip(acc) {
-            if let crate::walls::Motion::Piston(p) = &mut body.motion {
-                p.acceleration = a;
-            }
-        }
+    /// Dynamic bodies' accelerations from the wall pressures of the last rate evaluation
+    /// (staggered free bodies only when `all`).
+    pub(crate) fn store_body_accelerations(&mut self, all: bool) {
+        let acc = self.walls.body_accelerations(all);
+        self.walls.set_dynamic_accelerations(&acc);
     }
 
     /// The rate model handed to the sweep.

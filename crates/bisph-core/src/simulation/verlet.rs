@@ -45,10 +45,16 @@ impl<V: Vector> Simulation<V> {
                 .zip(f.density_rate.par_iter())
                 .for_each(|(rho, &drho)| *rho += drho * half);
         }
-        for p in self.walls.pistons_mut() {
-            p.velocity += half * p.acceleration;
-            p.position += dt * p.velocity;
+        // Dynamic bodies: kick and drift like the fluid.
+        let mut body_velocity = self.walls.dynamic_velocities();
+        for (v, a) in body_velocity
+            .iter_mut()
+            .zip(self.walls.dynamic_accelerations())
+        {
+            *v += half * a;
         }
+        self.walls.set_dynamic_velocities(&body_velocity);
+        self.walls.drift_bodies(dt);
         let power_before = self.wall_power;
         self.time += dt;
         self.step += 1;
@@ -59,16 +65,22 @@ impl<V: Vector> Simulation<V> {
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
         self.stage_state(half);
-        let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
-        for p in self.walls.pistons_mut() {
-            p.velocity += half * p.acceleration;
-        }
+        let predicted: Vec<f64> = body_velocity
+            .iter()
+            .zip(self.walls.dynamic_accelerations())
+            .map(|(v, a)| v + half * a)
+            .collect();
+        self.walls.set_dynamic_velocities(&predicted);
         self.walls.set_velocities_at(self.time);
         self.evaluate_rates();
-        self.store_piston_accelerations();
-        for (p, v) in self.walls.pistons_mut().zip(piston_velocities) {
-            p.velocity = v + half * p.acceleration;
+        self.store_body_accelerations(true);
+        for (v, a) in body_velocity
+            .iter_mut()
+            .zip(self.walls.dynamic_accelerations())
+        {
+            *v += half * a;
         }
+        self.walls.set_dynamic_velocities(&body_velocity);
         self.walls.set_velocities_at(self.time);
         // 3. kick.
         {

@@ -13,7 +13,8 @@ use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
-pub use bodies::{Body, Kinematics, Motion, Piston, PrescribedMotion};
+pub use bodies::{Body, Coupling, FreeBody, Kinematics, Motion, Piston, PrescribedMotion};
+use glam::DVec3;
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
 /// fluid, area (length in 2-D), velocity and owning body.
@@ -231,18 +232,112 @@ impl<V: Vector> Walls<V> {
         }
     }
 
-    /// Acceleration of every piston along its axis from the current wall pressures,
-    /// `(F_fluid . axis - F_out) / m` (zero for other bodies), in body order.
-    pub fn piston_accelerations(&self) -> Vec<f64> {
+    /// Generalised accelerations of every dynamic body (pistons, free bodies), in body order
+    /// and the layout of [`Motion::accelerations`], from the current wall pressures and the
+    /// bodies' current (midpoint) velocities. A piston: `(F_fluid . axis - F_out) / m`;
+    /// a free body: [`FreeBody::accelerations`]. Bodies with `iterated == false` and
+    /// `all == false` keep their stored accelerations (staggered coupling).
+    pub fn body_accelerations(&self, all: bool) -> Vec<f64> {
         let loads = self.body_loads(self.placed_at);
-        self.bodies
-            .iter()
-            .zip(loads)
-            .map(|(b, (force, _))| match b.motion {
-                Motion::Piston(p) => (force.dot(p.axis) - p.outside_force) / p.mass,
-                _ => 0.0,
-            })
-            .collect()
+        let mut out = Vec::new();
+        for (b, (force, torque)) in self.bodies.iter().zip(loads) {
+            if !all && !b.motion.iterated() {
+                b.motion.accelerations(&mut out);
+                continue;
+            }
+            match b.motion {
+                Motion::Piston(p) => out.push((force.dot(p.axis) - p.outside_force) / p.mass),
+                Motion::Free(free) => {
+                    let f = DVec3::from_array(force.to_xyz());
+                    let (a, alpha) = free.accelerations(f, bodies::angular_to_3d::<V>(torque));
+                    out.extend(a.to_array());
+                    out.extend(alpha.to_array());
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// Staggered coupling: bodies that do not iterate with the fluid take the accelerations of
+    /// the current wall loads (used through the next step); the others keep theirs.
+    pub fn update_staggered(&mut self) {
+        if self.bodies.iter().all(|b| b.motion.iterated()) {
+            return;
+        }
+        let fresh = self.body_accelerations(true);
+        let mut k = 0;
+        for b in &mut self.bodies {
+            let mut n = Vec::new();
+            b.motion.accelerations(&mut n);
+            if !b.motion.iterated() {
+                b.motion.set_accelerations(&fresh[k..k + n.len()]);
+            }
+            k += n.len();
+        }
+    }
+
+    /// Generalised velocities of every dynamic body (see [`Motion::velocities`]).
+    pub fn dynamic_velocities(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.velocities(&mut out);
+        }
+        out
+    }
+
+    /// Generalised accelerations of every dynamic body, as stored.
+    pub fn dynamic_accelerations(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.accelerations(&mut out);
+        }
+        out
+    }
+
+    /// Inertias of the generalised coordinates (residue weights).
+    pub fn dynamic_inertias(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.inertias(&mut out);
+        }
+        out
+    }
+
+    /// Sets the generalised velocities of every dynamic body.
+    pub fn set_dynamic_velocities(&mut self, values: &[f64]) {
+        let mut k = 0;
+        for b in &mut self.bodies {
+            k += b.motion.set_velocities(&values[k..]);
+        }
+    }
+
+    /// Sets the generalised accelerations of every dynamic body.
+    pub fn set_dynamic_accelerations(&mut self, values: &[f64]) {
+        let mut k = 0;
+        for b in &mut self.bodies {
+            k += b.motion.set_accelerations(&values[k..]);
+        }
+    }
+
+    /// Moves every dynamic body through `dt` with the velocities it holds (elements are
+    /// placed by the next [`Walls::move_to`]).
+    pub fn drift_bodies(&mut self, dt: f64) {
+        for b in &mut self.bodies {
+            b.motion.drift(dt);
+        }
+    }
+
+    /// Kinetic and gravity-potential energy of the free bodies.
+    pub fn body_energy(&self) -> (f64, f64) {
+        let mut e = (0.0, 0.0);
+        for b in &self.bodies {
+            if let Motion::Free(f) = &b.motion {
+                e.0 += f.kinetic_energy();
+                e.1 += f.potential_energy();
+            }
+        }
+        e
     }
 
     /// Mutable access to the pistons, in body order.
@@ -270,6 +365,29 @@ impl<V: Vector> Walls<V> {
             loads[b].1 = loads[b].1 + (e.centre[j] - centres[b]).cross(f);
         }
         loads
+    }
+
+    /// Number of points (fluid particles) that lie behind the walls: their nearest element
+    /// within `radius` (by distance to the element's plane patch, approximated by the centre
+    /// distance) has them on its wall side, `(x - c_j) . n_j > 0`. A diagnostic of particles
+    /// that got into a body or through a wall.
+    pub fn count_behind(&self, points: &[V], radius: f64) -> usize {
+        use rayon::prelude::*;
+        let e = &self.elements;
+        points
+            .par_iter()
+            .filter(|&&x| {
+                let mut best = (f64::INFINITY, 0.0);
+                self.grid
+                    .for_each_candidate_within(x, radius + e.max_reach, |j| {
+                        let d = (e.centre[j] - x).length_squared();
+                        if d < best.0 {
+                            best = (d, (x - e.centre[j]).dot(e.normal[j]));
+                        }
+                    });
+                best.0.is_finite() && best.1 > 0.0
+            })
+            .count()
     }
 
     /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`.
