@@ -88,19 +88,16 @@ pub fn run_apollo(name: &str, quick: bool, out: &Path) -> Result<CaseReport, Str
         format!("wall.1.translate=[{c},{c},{z}]"),
     ];
     if quick {
-        base.extend(
-            [
-                format!("fluid_block.0.max=[{side},{side},{depth}]"),
-                format!("wall.0.max=[{side},{side},{}]", depth + 4.8),
-                format!("domain.max=[{},{},{}]", side + 1.0, side + 1.0, depth + 9.0),
-                "fluid.sound_speed=500".into(),
-                "wall.1.element_size=0.16".into(),
-                "time.courant=0.5".into(),
-                "time.end=0.22".into(),
-                "output.vtk_interval=0".into(),
-            ]
-            .into_iter(),
-        );
+        base.extend([
+            format!("fluid_block.0.max=[{side},{side},{depth}]"),
+            format!("wall.0.max=[{side},{side},{}]", depth + 4.8),
+            format!("domain.max=[{},{},{}]", side + 1.0, side + 1.0, depth + 9.0),
+            "fluid.sound_speed=500".into(),
+            "wall.1.element_size=0.16".into(),
+            "time.courant=0.5".into(),
+            "time.end=0.22".into(),
+            "output.vtk_interval=0".into(),
+        ]);
     }
     let mut iterated = base.clone();
     iterated.push("body.0.free.coupling=\"iterated\"".into());
