@@ -24,6 +24,10 @@ pub struct Fluid<V: Vector> {
     pub acceleration: Vec<V>,
     /// Density rates `drho_i/dt` from the last rate evaluation.
     pub density_rate: Vec<f64>,
+    /// Integrated Shepard factor `gamma_i` (paper 3, eq 4; 1 when unused).
+    pub gamma: Vec<f64>,
+    /// `grad gamma_i` at the current position (paper 3, eq 10; zero when unused).
+    pub grad_gamma: Vec<V>,
 }
 
 impl<V: Vector> Fluid<V> {
@@ -47,6 +51,8 @@ impl<V: Vector> Fluid<V> {
         self.pressure.push(pressure);
         self.acceleration.push(V::ZERO);
         self.density_rate.push(0.0);
+        self.gamma.push(1.0);
+        self.grad_gamma.push(V::ZERO);
     }
 
     /// Reorders every array so that new entry `k` is old entry `order[k]`.
@@ -59,6 +65,8 @@ impl<V: Vector> Fluid<V> {
         permute_into(&mut self.mass, order, &mut scratch.scalars);
         permute_into(&mut self.pressure, order, &mut scratch.scalars);
         permute_into(&mut self.density_rate, order, &mut scratch.scalars);
+        permute_into(&mut self.gamma, order, &mut scratch.scalars);
+        permute_into(&mut self.grad_gamma, order, &mut scratch.vectors);
     }
 }
 
@@ -92,4 +100,6 @@ pub struct FluidState<'a, V> {
     pub pressure: &'a [f64],
     /// Volumes `m / rho` (precomputed once per evaluation: no division per pair).
     pub volume: &'a [f64],
+    /// Integrated Shepard factors (paper 3, eq 4).
+    pub gamma: &'a [f64],
 }

@@ -15,9 +15,10 @@ use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
-use crate::terms::{compute_rates, DensityDiffusion, RateModel};
+use crate::terms::{compute_rates, particle_operators, DensityDiffusion, DiffusionForm, RateModel};
 use crate::walls::energy_bi::EnergyConservingWalls;
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
+use crate::walls::usaw::{self, UsawWalls, Vertices, WallInterpolation};
 use crate::walls::WallModel;
 use crate::walls::Walls;
 use rayon::prelude::*;
@@ -31,6 +32,54 @@ pub enum WallModelChoice {
     Energy,
     /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
     ShepardBi(ShepardKind),
+    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
+    Usaw(UsawParams),
+}
+
+impl WallModelChoice {
+    /// `true` when the particles carry an integrated gamma (paper 3, eq 4).
+    pub fn needs_gamma(&self) -> bool {
+        matches!(
+            self,
+            WallModelChoice::Usaw(_) | WallModelChoice::ShepardBi(ShepardKind::Integrated)
+        )
+    }
+
+    /// `true` when gamma is integrated in time (else recomputed geometrically every step).
+    fn integrates_gamma(&self) -> bool {
+        match self {
+            WallModelChoice::Usaw(p) => !p.geometric_gamma,
+            WallModelChoice::ShepardBi(ShepardKind::Integrated) => true,
+            _ => false,
+        }
+    }
+}
+
+/// Options of the semi-analytical walls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct UsawParams {
+    /// How vertex pressures are extrapolated (paper 3, eqs 16-17, 82, 83).
+    pub interpolation: WallInterpolation,
+    /// Recompute gamma geometrically (paper 2) every step instead of integrating eq 4.
+    pub geometric_gamma: bool,
+}
+
+/// Which density diffusion the continuity equation carries (off when its coefficient is 0).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum DiffusionChoice {
+    /// delta-SPH with coefficient `delta` ([`SimConfig::delta`]). The default.
+    #[default]
+    Delta,
+    /// Mayrhofer's volume diffusion, paper 3 eqs 44 and 48: `K = c0 dx / eta`.
+    Mayrhofer {
+        /// `eta` of eq 48 (`O(10)-O(100)`).
+        eta: f64,
+    },
+    /// Ferrari's Riemann form, paper 3 eqs 49-51, times `coefficient` (1 = as printed).
+    Ferrari {
+        /// Multiplier of the term.
+        coefficient: f64,
+    },
 }
 
 /// Wall-clock seconds spent in each phase of the time loop (summed over steps).
@@ -86,6 +135,12 @@ pub struct SimConfig<V: Vector> {
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
+    /// Density diffusion form (its hydrostatic correction is [`SimConfig::delta_hydrostatic`]).
+    pub diffusion: DiffusionChoice,
+    /// The density power `k` of paper 3, eqs 37-38 (0 or 1).
+    pub density_power: u8,
+    /// Initial particle spacing `dx` (vertex volumes, `K = c0 dx / eta`).
+    pub particle_spacing: f64,
 }
 
 /// Scratch buffers reused every step.
@@ -161,7 +216,19 @@ impl<V: Vector> Simulation<V> {
         sim.walls.grid = CellGrid::new(cell);
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
+        if let WallModelChoice::Usaw(_) = sim.config.wall_model {
+            sim.walls.vertices = Vertices::from_elements(
+                &sim.walls.elements,
+                sim.config.eos.rho0(),
+                cell,
+                sim.config.particle_spacing,
+            )
+            .unwrap_or_default();
+        }
         sim.rebuild_grid(true);
+        if sim.config.wall_model.needs_gamma() {
+            sim.geometric_gamma();
+        }
         sim.scratch.velocity = sim.fluid.velocity.clone();
         sim.scratch.density = sim.fluid.density.clone();
         sim.evaluate_rates();
@@ -190,6 +257,36 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
+    /// Sets every particle's gamma to the geometric Shepard factor (paper 2) and its
+    /// `grad gamma` (paper 3, eq 10) at the current positions.
+    pub fn geometric_gamma(&mut self) {
+        let kernel = self.config.kernel;
+        let (e, g) = (&self.walls.elements, &self.walls.grid);
+        let f = &mut self.fluid;
+        f.gamma
+            .par_iter_mut()
+            .zip(f.grad_gamma.par_iter_mut())
+            .zip(f.position.par_iter())
+            .for_each(|((gamma, grad), &x)| {
+                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
+                *grad = usaw::grad_gamma(&kernel, x, e, g);
+            });
+    }
+
+    /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]).
+    pub(crate) fn advance_gamma(&mut self, dt: f64) {
+        let f = &mut self.fluid;
+        advance_gamma(
+            &self.config,
+            &self.walls,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+            &f.position,
+            &f.velocity,
+            dt,
+        );
+    }
+
     /// Pistons' accelerations from the wall pressures of the last rate evaluation.
     pub(crate) fn store_piston_accelerations(&mut self) {
         let acc = self.walls.piston_accelerations();
@@ -205,17 +302,28 @@ impl<V: Vector> Simulation<V> {
         let c = &self.config;
         let c0 = c.eos.c0();
         let hydrostatic_gradient = if c.delta_hydrostatic {
-            c.gravity * (-c.eos.rho0() / (c0 * c0))
+            c.gravity * (c.eos.rho0() / (c0 * c0))
         } else {
             V::ZERO
+        };
+        let (scale, form) = match c.diffusion {
+            DiffusionChoice::Delta => (c.delta * c.kernel.h * c0, DiffusionForm::Laplacian),
+            DiffusionChoice::Mayrhofer { eta } => {
+                (c0 * c.particle_spacing / eta, DiffusionForm::Laplacian)
+            }
+            DiffusionChoice::Ferrari { coefficient } => {
+                (coefficient, DiffusionForm::Riemann(c.eos))
+            }
         };
         RateModel {
             kernel: c.kernel,
             gravity: c.gravity,
             diffusion: DensityDiffusion {
-                scale: c.delta * c.kernel.h * c0,
+                scale,
                 hydrostatic_gradient,
+                form,
             },
+            density_power: c.density_power,
         }
     }
 
@@ -254,6 +362,7 @@ impl<V: Vector> Simulation<V> {
             pressure,
             acceleration,
             density_rate,
+            gamma,
             ..
         } = &mut self.fluid;
         pressure
@@ -273,6 +382,7 @@ impl<V: Vector> Simulation<V> {
             mass,
             pressure,
             volume,
+            gamma,
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         match self.config.wall_model {
@@ -292,9 +402,115 @@ impl<V: Vector> Simulation<V> {
                 };
                 sweep(&model, &bi, &state, grid, walls, acceleration, density_rate)
             }
+            WallModelChoice::Usaw(params) => {
+                walls.vertices.update(
+                    &model.kernel,
+                    &eos,
+                    model.gravity,
+                    params.interpolation,
+                    &state,
+                    grid,
+                );
+                let Walls {
+                    elements,
+                    grid: wall_grid,
+                    vertices,
+                    ..
+                } = walls;
+                let usaw = UsawWalls {
+                    vertices,
+                    density_power: model.density_power,
+                };
+                usaw.update_wall_pressure(&model.kernel, elements, &state, grid);
+                compute_rates(
+                    &model,
+                    &usaw,
+                    &state,
+                    grid,
+                    elements,
+                    wall_grid,
+                    acceleration,
+                    density_rate,
+                );
+            }
         }
         self.wall_power = self.walls.power();
         self.timings.rates += start.elapsed().as_secs_f64();
+    }
+
+    /// Skew-adjointness residual of the operators at the stored state (paper 3, eq 26, the
+    /// summand of eq 39): `<Grad p, u> + <p, Div u> = sum_a V_a (u_a . Grad_a p + p_a Div_a u)`
+    /// with the full (fluid + wall, renormalised) operators of the wall model in use. Zero
+    /// for skew-adjoint operators; summed in particle order (thread-independent).
+    pub fn skew_adjoint_residual(&mut self) -> f64 {
+        self.scratch.velocity.clone_from(&self.fluid.velocity);
+        self.scratch.density.clone_from(&self.fluid.density);
+        // Refresh pressures, volumes and wall values at the stored state.
+        let saved = (
+            self.fluid.acceleration.clone(),
+            self.fluid.density_rate.clone(),
+        );
+        let wall_power = self.wall_power;
+        self.evaluate_rates();
+        self.fluid.acceleration = saved.0;
+        self.fluid.density_rate = saved.1;
+        self.wall_power = wall_power;
+        let model = self.rate_model();
+        let f = &self.fluid;
+        let state = FluidState {
+            position: &f.position,
+            velocity: &f.velocity,
+            density: &f.density,
+            mass: &f.mass,
+            pressure: &f.pressure,
+            volume: &self.scratch.volume,
+            gamma: &f.gamma,
+        };
+        let (grid, walls) = (&self.fluid_grid, &self.walls);
+        let terms: Vec<f64> = (0..f.len())
+            .into_par_iter()
+            .map(|i| {
+                let op = match self.config.wall_model {
+                    WallModelChoice::Energy => particle_operators(
+                        &model,
+                        &EnergyConservingWalls,
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                    WallModelChoice::ShepardBi(shepard) => particle_operators(
+                        &model,
+                        &ShepardWalls {
+                            gravity: model.gravity,
+                            shepard,
+                        },
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                    WallModelChoice::Usaw(_) => particle_operators(
+                        &model,
+                        &UsawWalls {
+                            vertices: &walls.vertices,
+                            density_power: model.density_power,
+                        },
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                };
+                let grad = op.pressure_gradient + op.wall_pressure_gradient;
+                let div = op.velocity_divergence + op.wall_velocity_divergence;
+                state.volume[i] * (state.velocity[i].dot(grad) + state.pressure[i] * div)
+            })
+            .collect();
+        terms.iter().sum()
     }
 
     /// Time step for the next step: fixed, or `Co min(h / c0, sqrt(h / max|a|))`.
@@ -438,6 +654,39 @@ impl<V: Vector> Simulation<V> {
             .map(|u| u.length())
             .fold(0.0, f64::max)
     }
+}
+
+/// Advances gamma after a drift `r += u dt` (paper 3, eq 4, fixed walls):
+/// `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (trapezoidal line integral), or the
+/// geometric value when so chosen. Does nothing for models without gamma.
+pub(crate) fn advance_gamma<V: Vector>(
+    config: &SimConfig<V>,
+    walls: &Walls<V>,
+    gamma: &mut [f64],
+    grad_gamma: &mut [V],
+    position: &[V],
+    drift: &[V],
+    dt: f64,
+) {
+    if !config.wall_model.needs_gamma() {
+        return;
+    }
+    let kernel = config.kernel;
+    let (e, g) = (&walls.elements, &walls.grid);
+    let integrate = config.wall_model.integrates_gamma();
+    gamma
+        .par_iter_mut()
+        .zip(grad_gamma.par_iter_mut())
+        .zip(position.par_iter().zip(drift.par_iter()))
+        .for_each(|((gamma, grad), (&x, &u))| {
+            let new = usaw::grad_gamma(&kernel, x, e, g);
+            if integrate {
+                *gamma += (*grad + new).dot(u) * (0.5 * dt);
+            } else {
+                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
+            }
+            *grad = new;
+        });
 }
 
 /// Wall pressures, then rates, for one wall model.

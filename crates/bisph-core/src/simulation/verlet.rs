@@ -58,6 +58,7 @@ impl<V: Vector> Simulation<V> {
         self.walls.move_to(self.time);
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+        self.advance_gamma(dt);
         self.stage_state(half);
         let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
         for p in self.walls.pistons_mut() {
