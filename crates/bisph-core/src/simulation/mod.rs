@@ -287,6 +287,15 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
+    /// Re-evaluates the rates at the stored state (after editing velocities or densities by
+    /// hand, e.g. to set an initial velocity field).
+    pub fn refresh_rates(&mut self) {
+        self.stage_state(0.0);
+        self.evaluate_rates();
+        self.store_piston_accelerations();
+        self.refresh_pressure();
+    }
+
     /// Pistons' accelerations from the wall pressures of the last rate evaluation.
     pub(crate) fn store_piston_accelerations(&mut self) {
         let acc = self.walls.piston_accelerations();
