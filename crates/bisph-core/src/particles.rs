@@ -28,6 +28,9 @@ pub struct Fluid<V: Vector> {
     pub gamma: Vec<f64>,
     /// `grad gamma_i` at the current position (paper 3, eq 10; zero when unused).
     pub grad_gamma: Vec<V>,
+    /// Density by summation (paper 3, eq 84): `C_i` in
+    /// `gamma_i rho_i = sum_P m_j W_ij + C_i`, the accumulated diffusion (zero when unused).
+    pub density_offset: Vec<f64>,
 }
 
 impl<V: Vector> Fluid<V> {
@@ -53,6 +56,7 @@ impl<V: Vector> Fluid<V> {
         self.density_rate.push(0.0);
         self.gamma.push(1.0);
         self.grad_gamma.push(V::ZERO);
+        self.density_offset.push(0.0);
     }
 
     /// Reorders every array so that new entry `k` is old entry `order[k]`.
@@ -67,6 +71,7 @@ impl<V: Vector> Fluid<V> {
         permute_into(&mut self.density_rate, order, &mut scratch.scalars);
         permute_into(&mut self.gamma, order, &mut scratch.scalars);
         permute_into(&mut self.grad_gamma, order, &mut scratch.vectors);
+        permute_into(&mut self.density_offset, order, &mut scratch.scalars);
     }
 }
 

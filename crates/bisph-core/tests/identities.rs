@@ -93,6 +93,7 @@ fn powers<V: Vector>(
             form: DiffusionForm::Laplacian,
         },
         density_power: 0,
+        summation_density: false,
     };
     let volume: Vec<f64> = state
         .mass

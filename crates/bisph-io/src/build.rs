@@ -425,6 +425,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             0
         },
         particle_spacing: case.resolution.dx,
+        summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
         integrator: Integrator::Verlet,

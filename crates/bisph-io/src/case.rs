@@ -117,6 +117,20 @@ pub struct UsawSection {
     /// The power `k` of the operators (paper 3, eqs 37-38): 0 or 1.
     #[serde(default)]
     pub density_power: u8,
+    /// `"differential"` (eq 12, default) or `"summation"` (eqs 13 and 84).
+    #[serde(default)]
+    pub continuity: ContinuityName,
+}
+
+/// Continuity equation of the semi-analytical walls (`usaw.continuity`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContinuityName {
+    /// `drho/dt = -rho Div^{gamma,k}(v)` (paper 3, eq 12).
+    #[default]
+    Differential,
+    /// `gamma rho = sum_P m W` (eq 13) with the diffusion integrated in time (eq 84).
+    Summation,
 }
 
 /// `[fluid]`: material and physics.
@@ -941,6 +955,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     let integrated = c.boundary == BoundaryName::Usaw && c.usaw.gamma == UsawGammaName::Integrated
         || c.boundary == BoundaryName::Bi && c.shepard == ShepardName::Integrated;
+    if c.boundary == BoundaryName::Usaw
+        && c.usaw.continuity == ContinuityName::Summation
+        && c.time.integrator != IntegratorName::Verlet
+    {
+        return e(
+            "usaw.continuity",
+            "\"summation\" needs time.integrator = \"verlet\"".into(),
+        );
+    }
     if c.boundary == BoundaryName::Usaw && c.dim != 2 {
         return e(
             "boundary",

@@ -141,6 +141,9 @@ pub struct SimConfig<V: Vector> {
     pub density_power: u8,
     /// Initial particle spacing `dx` (vertex volumes, `K = c0 dx / eta`).
     pub particle_spacing: f64,
+    /// Density by summation, `gamma rho = sum_P m W + C` (paper 3, eqs 13 and 84; usaw only,
+    /// explicit Verlet), instead of the continuity equation (eq 12).
+    pub summation_density: bool,
 }
 
 /// Scratch buffers reused every step.
@@ -229,6 +232,14 @@ impl<V: Vector> Simulation<V> {
         if sim.config.wall_model.needs_gamma() {
             sim.geometric_gamma();
         }
+        if sim.summation() {
+            // C_i = gamma_i rho_i - sum_P m_j W_ij: the initial densities are kept.
+            let sums = sim.kernel_sums();
+            let f = &mut sim.fluid;
+            for i in 0..f.len() {
+                f.density_offset[i] = f.gamma[i] * f.density[i] - sums[i];
+            }
+        }
         sim.scratch.velocity = sim.fluid.velocity.clone();
         sim.scratch.density = sim.fluid.density.clone();
         sim.evaluate_rates();
@@ -287,6 +298,46 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
+    /// `true` when the densities come from summation (paper 3, eq 84).
+    pub(crate) fn summation(&self) -> bool {
+        self.config.summation_density && matches!(self.config.wall_model, WallModelChoice::Usaw(_))
+    }
+
+    /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
+    fn kernel_sums(&self) -> Vec<f64> {
+        let kernel = self.config.kernel;
+        let (f, v, grid) = (&self.fluid, &self.walls.vertices, &self.fluid_grid);
+        (0..f.len())
+            .into_par_iter()
+            .map(|i| {
+                let x = f.position[i];
+                let mut s = 0.0;
+                grid.for_each_neighbour(x, &f.position, kernel.support, |j, _, r| {
+                    s += f.mass[j] * kernel.value(r);
+                });
+                v.grid
+                    .for_each_neighbour(x, &v.position, kernel.support, |j, _, r| {
+                        s += v.mass[j] * kernel.value(r);
+                    });
+                s
+            })
+            .collect()
+    }
+
+    /// Paper 3, eq 84, after a drift by `dt`: `C_i += dt gamma_i D_i` with the diffusion rate
+    /// `D_i` of the last evaluation (held in `density_rate`), then
+    /// `rho_i = (sum_P m_j W_ij + C_i) / gamma_i` at the new positions; the density rates are
+    /// cleared so the staged state uses these densities.
+    pub(crate) fn summation_densities(&mut self, dt: f64) {
+        let sums = self.kernel_sums();
+        let f = &mut self.fluid;
+        for i in 0..f.len() {
+            f.density_offset[i] += dt * f.gamma[i] * f.density_rate[i];
+            f.density[i] = (sums[i] + f.density_offset[i]) / f.gamma[i];
+            f.density_rate[i] = 0.0;
+        }
+    }
+
     /// Re-evaluates the rates at the stored state (after editing velocities or densities by
     /// hand, e.g. to set an initial velocity field).
     pub fn refresh_rates(&mut self) {
@@ -333,6 +384,7 @@ impl<V: Vector> Simulation<V> {
                 form,
             },
             density_power: c.density_power,
+            summation_density: self.summation(),
         }
     }
 

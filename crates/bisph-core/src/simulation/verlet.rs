@@ -17,6 +17,7 @@ impl<V: Vector> Simulation<V> {
     /// One explicit Verlet step of size `dt`.
     pub(super) fn verlet_step(&mut self, dt: f64) -> Result<(), SimError> {
         let half = 0.5 * dt;
+        let summation = self.summation();
         // 1. kick, bounce off walls, drift.
         {
             let f = &mut self.fluid;
@@ -40,10 +41,12 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.velocity.par_iter())
                 .for_each(|(r, &u)| *r += u * dt);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
         for p in self.walls.pistons_mut() {
             p.velocity += half * p.acceleration;
@@ -59,6 +62,9 @@ impl<V: Vector> Simulation<V> {
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
         self.advance_gamma(dt);
+        if summation {
+            self.summation_densities(dt);
+        }
         self.stage_state(half);
         let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
         for p in self.walls.pistons_mut() {
@@ -78,10 +84,12 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.acceleration.par_iter())
                 .for_each(|(u, &a)| *u += a * half);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
         self.wall_work += half * (power_before + self.wall_power);
         self.refresh_pressure();

@@ -44,6 +44,9 @@ pub struct RateModel<V: Vector> {
     pub diffusion: DensityDiffusion<V>,
     /// The density power `k` of paper 3, eqs 37-38 (0: paper 1, eqs 10-11; or 1).
     pub density_power: u8,
+    /// Density by summation (paper 3, eqs 13 and 84): the sweep's density rate is then the
+    /// diffusion term alone, which the integrator accumulates (see [`crate::simulation`]).
+    pub summation_density: bool,
 }
 
 /// Operators of particle `i` at the state `fluid`.
@@ -152,7 +155,10 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
                 particle_operators(model, wall_model, fluid, fluid_grid, elements, wall_grid, i);
             let rho = fluid.density[i];
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + model.gravity;
-            *drho = -rho * (op.velocity_divergence + op.wall_velocity_divergence)
-                + op.density_diffusion;
+            *drho = if model.summation_density {
+                op.density_diffusion
+            } else {
+                -rho * (op.velocity_divergence + op.wall_velocity_divergence) + op.density_diffusion
+            };
         });
 }
