@@ -236,8 +236,8 @@ impl<V: Vector> Simulation<V> {
             // C_i = gamma_i rho_i - sum_P m_j W_ij: the initial densities are kept.
             let sums = sim.kernel_sums();
             let f = &mut sim.fluid;
-            for i in 0..f.len() {
-                f.density_offset[i] = f.gamma[i] * f.density[i] - sums[i];
+            for (i, s) in sums.iter().enumerate() {
+                f.density_offset[i] = f.gamma[i] * f.density[i] - s;
             }
         }
         sim.scratch.velocity = sim.fluid.velocity.clone();
@@ -331,9 +331,9 @@ impl<V: Vector> Simulation<V> {
     pub(crate) fn summation_densities(&mut self, dt: f64) {
         let sums = self.kernel_sums();
         let f = &mut self.fluid;
-        for i in 0..f.len() {
+        for (i, s) in sums.iter().enumerate() {
             f.density_offset[i] += dt * f.gamma[i] * f.density_rate[i];
-            f.density[i] = (sums[i] + f.density_offset[i]) / f.gamma[i];
+            f.density[i] = (s + f.density_offset[i]) / f.gamma[i];
             f.density_rate[i] = 0.0;
         }
     }
