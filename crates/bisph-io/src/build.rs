@@ -7,8 +7,10 @@ use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::{self, ElementShape};
 use bisph_core::packing::WallIntegrals;
 use bisph_core::probes::{Probe, ProbeKind};
+use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
+use bisph_core::walls::usaw::WallInterpolation;
 use bisph_core::walls::{
     Body, BoundaryElements, Coupling, FreeBody, Motion, Piston, PrescribedMotion, Stretch, Walls,
 };
@@ -438,8 +440,35 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi(match case.shepard {
                 crate::case::ShepardName::Discrete => ShepardKind::Discrete,
                 crate::case::ShepardName::Geometric => ShepardKind::Geometric,
+                crate::case::ShepardName::Integrated => ShepardKind::Integrated,
+            }),
+            crate::case::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
+                interpolation: match case.usaw.wall_interpolation {
+                    crate::case::WallInterpolationName::Shepard => WallInterpolation::Shepard,
+                    crate::case::WallInterpolationName::Neumann => WallInterpolation::Neumann,
+                    crate::case::WallInterpolationName::Hydrostatic => {
+                        WallInterpolation::Hydrostatic
+                    }
+                },
+                geometric_gamma: case.usaw.gamma == crate::case::UsawGammaName::Geometric,
             }),
         },
+        diffusion: match case.fluid.diffusion {
+            crate::case::DiffusionName::Delta => DiffusionChoice::Delta,
+            crate::case::DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
+                eta: case.fluid.eta,
+            },
+            crate::case::DiffusionName::Ferrari => DiffusionChoice::Ferrari {
+                coefficient: case.fluid.ferrari_coefficient,
+            },
+        },
+        density_power: if case.boundary == crate::case::BoundaryName::Usaw {
+            case.usaw.density_power
+        } else {
+            0
+        },
+        particle_spacing: case.resolution.dx,
+        summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
         integrator: Integrator::Verlet,

@@ -50,6 +50,8 @@ pub enum BoundaryName {
     Energy,
     /// Classic boundary integrals with discrete Shepard renormalisation (paper 1, eqs 24-25).
     Bi,
+    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
+    Usaw,
 }
 
 /// Shepard factor name.
@@ -61,6 +63,74 @@ pub enum ShepardName {
     Discrete,
     /// From the wall elements alone (paper 2).
     Geometric,
+    /// Integrated in time, `dgamma/dt = v_rel . grad gamma` (paper 3, eq 4).
+    Integrated,
+}
+
+/// Density diffusion name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DiffusionName {
+    /// delta-SPH with `fluid.delta`.
+    #[default]
+    Delta,
+    /// Mayrhofer's volume diffusion (paper 3, eqs 44, 48) with `fluid.eta`.
+    Mayrhofer,
+    /// Ferrari's Riemann form (paper 3, eqs 49-51) times `fluid.ferrari_coefficient`.
+    Ferrari,
+}
+
+/// Vertex-value extrapolation name (`usaw.wall_interpolation`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum WallInterpolationName {
+    /// Paper 3, eqs 16-17.
+    #[default]
+    Shepard,
+    /// Neumann with gravity (`dp/dn = rho g . n`), the constraint of eq 82.
+    Neumann,
+    /// Hydrostatic-corrected, eq 83.
+    Hydrostatic,
+}
+
+/// Gamma of the semi-analytical walls (`usaw.gamma`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum UsawGammaName {
+    /// Integrated in time (paper 3, eq 4) from the geometric value.
+    #[default]
+    Integrated,
+    /// Geometric (paper 2) every step.
+    Geometric,
+}
+
+/// `[usaw]`: options of the semi-analytical walls.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct UsawSection {
+    /// Vertex pressure extrapolation.
+    #[serde(default)]
+    pub wall_interpolation: WallInterpolationName,
+    /// How gamma is obtained.
+    #[serde(default)]
+    pub gamma: UsawGammaName,
+    /// The power `k` of the operators (paper 3, eqs 37-38): 0 or 1.
+    #[serde(default)]
+    pub density_power: u8,
+    /// `"differential"` (eq 12, default) or `"summation"` (eqs 13 and 84).
+    #[serde(default)]
+    pub continuity: ContinuityName,
+}
+
+/// Continuity equation of the semi-analytical walls (`usaw.continuity`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContinuityName {
+    /// `drho/dt = -rho Div^{gamma,k}(v)` (paper 3, eq 12).
+    #[default]
+    Differential,
+    /// `gamma rho = sum_P m W` (eq 13) with the diffusion integrated in time (eq 84).
+    Summation,
 }
 
 /// `[fluid]`: material and physics.
@@ -86,9 +156,22 @@ pub struct FluidSection {
     /// delta-SPH coefficient (0 = off).
     #[serde(default)]
     pub delta: f64,
-    /// Hydrostatic correction of the delta-SPH term.
+    /// Hydrostatic correction of the density diffusion (delta-SPH, or paper 3 eq 81).
     #[serde(default = "yes")]
     pub delta_hydrostatic: bool,
+    /// Density diffusion form.
+    #[serde(default)]
+    pub diffusion: DiffusionName,
+    /// `eta` of Mayrhofer's volume diffusion, `K = c0 dx / eta` (paper 3, eq 48).
+    #[serde(default = "default_eta")]
+    pub eta: f64,
+    /// Multiplier of Ferrari's diffusion term.
+    #[serde(default = "one")]
+    pub ferrari_coefficient: f64,
+}
+
+fn default_eta() -> f64 {
+    50.0
 }
 
 fn default_tait_exponent() -> f64 {
@@ -707,6 +790,9 @@ pub struct Case {
     /// Shepard factor of the `bi` walls: `"discrete"` or `"geometric"`.
     #[serde(default)]
     pub shepard: ShepardName,
+    /// Options of the semi-analytical walls (`boundary = "usaw"`).
+    #[serde(default)]
+    pub usaw: UsawSection,
     /// Reflect particles about to cross a wall (energy-neutral on fixed walls).
     #[serde(default = "yes")]
     pub elastic_bounce: bool,
@@ -1027,6 +1113,56 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         return e(
             "fluid.delta",
             format!("expected a value in [0, 1], found {}", c.fluid.delta),
+        );
+    }
+    if !(c.fluid.eta.is_finite() && c.fluid.eta > 0.0) {
+        return e(
+            "fluid.eta",
+            format!("expected a positive number, found {}", c.fluid.eta),
+        );
+    }
+    if !(c.fluid.ferrari_coefficient.is_finite() && c.fluid.ferrari_coefficient >= 0.0) {
+        return e(
+            "fluid.ferrari_coefficient",
+            format!(
+                "expected zero or a positive number, found {}",
+                c.fluid.ferrari_coefficient
+            ),
+        );
+    }
+    if c.usaw.density_power > 1 {
+        return e(
+            "usaw.density_power",
+            format!("expected 0 or 1, found {}", c.usaw.density_power),
+        );
+    }
+    let integrated = c.boundary == BoundaryName::Usaw && c.usaw.gamma == UsawGammaName::Integrated
+        || c.boundary == BoundaryName::Bi && c.shepard == ShepardName::Integrated;
+    if c.boundary == BoundaryName::Usaw
+        && c.usaw.continuity == ContinuityName::Summation
+        && c.time.integrator != IntegratorName::Verlet
+    {
+        return e(
+            "usaw.continuity",
+            "\"summation\" needs time.integrator = \"verlet\"".into(),
+        );
+    }
+    if c.boundary == BoundaryName::Usaw && c.dim != 2 {
+        return e(
+            "boundary",
+            format!("\"usaw\" walls are 2-D only, found dim = {}", c.dim),
+        );
+    }
+    if c.shepard == ShepardName::Integrated && c.dim != 2 {
+        return e(
+            "shepard",
+            format!("\"integrated\" gamma is 2-D only, found dim = {}", c.dim),
+        );
+    }
+    if integrated && !c.body.is_empty() {
+        return e(
+            "body",
+            "the integrated gamma (paper 3, eq 4) is built for fixed walls: use usaw.gamma = \"geometric\" or shepard = \"geometric\" with moving bodies".into(),
         );
     }
     if !c.fluid.background_pressure.is_finite() {

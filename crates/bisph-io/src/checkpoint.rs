@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// File name of the checkpoint in an output directory.
@@ -168,6 +168,9 @@ impl<V: Vector> SimState<V> {
         d.pressure.clone_from(&s.pressure);
         d.acceleration.clone_from(&s.acceleration);
         d.density_rate.clone_from(&s.density_rate);
+        d.gamma.clone_from(&s.gamma);
+        d.grad_gamma.clone_from(&s.grad_gamma);
+        d.density_offset.clone_from(&s.density_offset);
         let e = &sim.walls.elements;
         self.centre.clone_from(&e.centre);
         self.normal.clone_from(&e.normal);
@@ -199,6 +202,9 @@ impl<V: Vector> SimState<V> {
             f.pressure.len(),
             f.acceleration.len(),
             f.density_rate.len(),
+            f.gamma.len(),
+            f.grad_gamma.len(),
+            f.density_offset.len(),
         ]
         .iter()
         .any(|&k| k != n)
@@ -246,6 +252,9 @@ impl<V: Vector> SimState<V> {
             && finite(&f.mass)
             && finite(&f.pressure)
             && finite(&f.density_rate)
+            && finite(&f.gamma)
+            && finite_v(&f.grad_gamma)
+            && finite(&f.density_offset)
             && f.density.iter().all(|&r| r.is_finite() && r > 0.0))
         {
             return Err("non-finite fluid values".into());
@@ -336,6 +345,9 @@ impl<V: Vector> SimState<V> {
         d.pressure.clone_from(&f.pressure);
         d.acceleration.clone_from(&f.acceleration);
         d.density_rate.clone_from(&f.density_rate);
+        d.gamma.clone_from(&f.gamma);
+        d.grad_gamma.clone_from(&f.grad_gamma);
+        d.density_offset.clone_from(&f.density_offset);
         let e = &mut sim.walls.elements;
         e.centre.clone_from(&self.centre);
         e.normal.clone_from(&self.normal);
@@ -575,6 +587,9 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64s(&f.pressure);
     w.vectors(&f.acceleration);
     w.f64s(&f.density_rate);
+    w.f64s(&f.gamma);
+    w.vectors(&f.grad_gamma);
+    w.f64s(&f.density_offset);
     w.vectors(&s.centre);
     w.vectors(&s.normal);
     w.f64s(&s.area);
@@ -644,6 +659,9 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         pressure: r.f64s()?,
         acceleration: r.vectors()?,
         density_rate: r.f64s()?,
+        gamma: r.f64s()?,
+        grad_gamma: r.vectors()?,
+        density_offset: r.f64s()?,
     };
     s.centre = r.vectors()?;
     s.normal = r.vectors()?;

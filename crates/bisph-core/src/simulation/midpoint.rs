@@ -177,6 +177,15 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(drift.par_iter())
             .for_each(|(r, &u)| *r += u * dt);
+        super::advance_gamma(
+            &self.config,
+            &self.walls,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+            &f.position,
+            drift,
+            dt,
+        );
         f.density
             .par_iter_mut()
             .zip(f.density_rate.par_iter())

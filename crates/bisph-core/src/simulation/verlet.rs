@@ -17,6 +17,7 @@ impl<V: Vector> Simulation<V> {
     /// One explicit Verlet step of size `dt`.
     pub(super) fn verlet_step(&mut self, dt: f64) -> Result<(), SimError> {
         let half = 0.5 * dt;
+        let summation = self.summation();
         // 1. kick, bounce off walls, drift.
         {
             let f = &mut self.fluid;
@@ -40,10 +41,12 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.velocity.par_iter())
                 .for_each(|(r, &u)| *r += u * dt);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
         // Dynamic bodies: kick and drift like the fluid.
         let mut body_velocity = self.walls.dynamic_velocities();
@@ -64,6 +67,10 @@ impl<V: Vector> Simulation<V> {
         self.walls.move_to(self.time);
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+        self.advance_gamma(dt);
+        if summation {
+            self.summation_densities(dt);
+        }
         self.stage_state(half);
         let predicted: Vec<f64> = body_velocity
             .iter()
@@ -89,10 +96,12 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.acceleration.par_iter())
                 .for_each(|(u, &a)| *u += a * half);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
         self.wall_work += half * (power_before + self.wall_power);
         self.refresh_pressure();

@@ -8,6 +8,7 @@ pub mod bounce;
 pub mod energy_bi;
 pub mod geometric_shepard;
 pub mod shepard_bi;
+pub mod usaw;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
@@ -113,6 +114,8 @@ pub struct Walls<V: Vector> {
     pub placed_at: f64,
     /// Elements that stretch with a piston so their number stays constant.
     pub stretch: Vec<Stretch>,
+    /// Vertex particles of the semi-analytical walls (empty for the other models).
+    pub vertices: usaw::Vertices<V>,
 }
 
 /// Wall elements aligned with a piston's axis that stretch affinely between a fixed anchor
@@ -140,6 +143,7 @@ impl<V: Vector> Walls<V> {
             grid: CellGrid::new(cell_size),
             placed_at: 0.0,
             stretch: Vec::new(),
+            vertices: usaw::Vertices::default(),
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
@@ -408,12 +412,28 @@ pub struct WallTerms<V> {
     pub velocity_divergence: f64,
 }
 
+/// The state of one particle as a wall model sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleView<V> {
+    /// Position.
+    pub x: V,
+    /// Velocity.
+    pub u: V,
+    /// Pressure.
+    pub p: f64,
+    /// Density.
+    pub rho: f64,
+}
+
 /// A wall model: supplies the wall part of the operators for a fluid particle and the wall
 /// pressure on each element. Physical terms ask it; they never test which model is active.
 pub trait WallModel<V: Vector>: Sync {
     /// `true` when the whole operator (fluid and wall sums) is divided by the particle's
     /// discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 1, eqs 24-25).
     const RENORMALISE: bool;
+
+    /// `true` when the density diffusion is divided by `gamma_i` as well (paper 3, eq 54).
+    const RENORMALISE_DIFFUSION: bool = false;
 
     /// Refreshes `elements.pressure`, the wall pressure used for forces and, where the model
     /// needs it, in the wall terms. Called before every rate sweep.
@@ -432,25 +452,25 @@ pub trait WallModel<V: Vector>: Sync {
     }
 
     /// The Shepard factor `gamma_i` that divides the operators of a particle at `x` when
-    /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid.
+    /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid,
+    /// `state_gamma` the particle's integrated gamma (paper 3, eq 4).
     fn renormalisation(
         &self,
         _kernel: &Wendland,
         _x: V,
         discrete: f64,
+        _state_gamma: f64,
         _elements: &BoundaryElements<V>,
         _grid: &CellGrid<V>,
     ) -> f64 {
         discrete
     }
 
-    /// Wall sums for a fluid particle at `x` with velocity `u` and pressure `p`.
+    /// Wall sums for the fluid particle `a`.
     fn particle_terms(
         &self,
         kernel: &Wendland,
-        x: V,
-        u: V,
-        p: f64,
+        a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V>;
