@@ -115,11 +115,18 @@ pub struct Diagnosis {
 
 impl std::fmt::Display for Diagnosis {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} = {:.6e} outside {} at step {} (t = {:.6e} s)",
-            self.quantity, self.value, self.allowed, self.step, self.time
-        )?;
+        match self.kind {
+            TripKind::NonFinite | TripKind::LeftDomain => write!(
+                f,
+                "{} outside {} at step {} (t = {:.6e} s)",
+                self.quantity, self.allowed, self.step, self.time
+            )?,
+            _ => write!(
+                f,
+                "{} = {:.6e} outside {} at step {} (t = {:.6e} s)",
+                self.quantity, self.value, self.allowed, self.step, self.time
+            )?,
+        }
         if let Some(p) = self.particles.first() {
             write!(
                 f,

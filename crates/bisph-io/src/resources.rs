@@ -6,13 +6,16 @@ use crate::case::LoadedCase;
 /// Bytes per fluid particle of a running simulation: the fluid arrays (id, position, velocity,
 /// density, mass, pressure, acceleration, density rate), the integrator's scratch (staged
 /// velocity and density, volume, previous rates, drift, permutation buffers, bounce), the cell
-/// grid, and the run loop's copy of the last good state.
+/// grid, the run loop's copy of the last good state, and output temporaries.
 pub fn bytes_per_particle(dim: usize) -> u64 {
     let v = 8 * dim as u64;
     let fluid = 4 + 3 * v + 4 * 8;
     let scratch = 4 * v + 5 * 8 + 4;
     let grid = 8;
-    2 * fluid + scratch + grid
+    // Output and energy temporaries (VTK arrays, heights): measured on the 2-D dam break, the
+    // total is within 3% of the 356 bytes per particle its peak resident size grows by.
+    let temporaries = 3 * v + 16;
+    2 * fluid + scratch + grid + temporaries
 }
 
 /// Boundary elements are counted per particle of the wall's surface: bytes per element.

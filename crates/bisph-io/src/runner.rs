@@ -579,7 +579,8 @@ pub fn run<V: CaseDim>(
             counters.dt0 = sim.next_dt();
         }
         counters.csv_lengths = outputs.lengths();
-        counters.frame_times.clone_from(&frames.times().to_vec());
+        counters.frame_times.clear();
+        counters.frame_times.extend_from_slice(frames.times());
         counters.wall_seconds = wall_before + started.elapsed().as_secs_f64();
         good.capture(&sim);
         good_counters.clone_from(&counters);

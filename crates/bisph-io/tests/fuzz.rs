@@ -380,3 +380,35 @@ fn fuzz_corpus_regressions() {
         checkpoint_body(&bytes, &loaded);
     }
 }
+
+/// Hostile inputs found by review: each would once have been accepted and then exhausted memory
+/// (a coordinate of 1e300 sizing the cell grid), looped for ever (a next output time far in the
+/// past) or fed NaN into the geometry (an STL vertex `nan`).
+#[test]
+fn hostile_inputs_are_refused() {
+    let (good, loaded) = checkpoint_bytes();
+    let path = Path::new("<hostile>");
+    let c = checkpoint::decode::<DVec2>(path, &good).unwrap();
+    let mut sim = build_simulation::<DVec2>(&loaded).unwrap();
+    let mut far = c.clone();
+    far.sim.fluid.position[0] = DVec2::new(1e300, 0.0);
+    let back = checkpoint::decode::<DVec2>(path, &checkpoint::encode(&far)).unwrap();
+    let e = back.sim.restore(&mut sim).unwrap_err();
+    assert!(e.contains("outside the domain"), "{e}");
+    let mut walls = c.clone();
+    walls.sim.centre[0] = DVec2::new(1e300, 1e300);
+    let e = walls.sim.restore(&mut sim).unwrap_err();
+    assert!(e.contains("far beyond"), "{e}");
+    let mut past = c.clone();
+    past.run.next_series = -1e300;
+    assert!(past.run.check(0.01, 1e-3, 0.0).is_err());
+    past.run.next_series = f64::NAN;
+    assert!(past.run.check(0.01, 1e-3, 0.0).is_err());
+    let stl =
+        b"solid t\nouter loop\nvertex nan 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendsolid\n";
+    let file = std::env::temp_dir().join(format!("bisph-hostile-{}.stl", std::process::id()));
+    std::fs::write(&file, stl).unwrap();
+    let e = bisph_io::shapes::read_stl(&file).unwrap_err();
+    assert!(e.contains("non-finite"), "{e}");
+    let _ = std::fs::remove_file(&file);
+}

@@ -72,6 +72,20 @@ const DAM_BREAK: Case = Case {
     checkpoint_steps: "9",
 };
 
+const DAM_BREAK_3D: Case = Case {
+    name: "dam3d",
+    file: "dam-break-3d.toml",
+    sets: &[
+        "resolution.dx=0.04",
+        "time.end=0.1",
+        "output.vtk_interval=0.05",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "energy.csv",
+    checkpoint_steps: "5",
+};
+
 fn fresh_args(case: &Case, out: &Path) -> Vec<String> {
     let mut a = vec![
         "run".to_string(),
@@ -239,6 +253,14 @@ fn killed_runs_resume_bit_identically() {
         "only {} kills hit a running process",
         piston + dam
     );
+}
+
+/// 3-D: quadrilateral elements, a 3-D cell grid; two SIGKILLs, resumed on two threads.
+#[test]
+fn killed_3d_run_resumes_bit_identically() {
+    let (kills, resumes) = kill_resume_compare(&DAM_BREAK_3D, 0x5eed_0003, 1, 2);
+    eprintln!("3-D: {kills} SIGKILLs, {resumes} resumes");
+    assert!(resumes >= 1);
 }
 
 /// SIGTERM: the run finishes its step, writes a checkpoint, exits with code 10 and its
