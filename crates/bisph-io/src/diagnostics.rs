@@ -334,7 +334,8 @@ impl Watch {
 
     /// Particles whose straight path over the step crossed an element from its fluid side
     /// (`(r - c_j) . n_j <= 0`, normals point out of the fluid) to its far side, through the
-    /// element's own extent.
+    /// element's own extent, and ended more than `h / 100` behind it (a moving wall may sweep
+    /// over a particle by a hair within a step; the wall term pushes it back the next one).
     fn wall_crossing<V: Vector>(
         &mut self,
         sim: &Simulation<V>,
@@ -354,6 +355,7 @@ impl Watch {
         }
         let e = &sim.walls.elements;
         let support = sim.config.kernel.support;
+        let tolerance = 0.01 * sim.config.kernel.h;
         let index = &self.previous_index;
         let bad = violators(sim, |i| {
             let k = *index.get(f.id[i] as usize)? as usize;
@@ -375,7 +377,7 @@ impl Watch {
                         depth = Some(depth.map_or(s1, |d: f64| d.max(s1)));
                     }
                 });
-            depth.map(|d| (d, d))
+            depth.filter(|&d| d > tolerance).map(|d| (d, d))
         });
         if bad.is_empty() {
             return None;
@@ -384,7 +386,10 @@ impl Watch {
             sim,
             TripKind::WallCrossing,
             "depth behind a crossed wall element [m]",
-            "0 (particles stay on the fluid side; diagnostics.wall_crossing)".into(),
+            format!(
+                "at most h/100 = {:e} (particles stay on the fluid side; diagnostics.wall_crossing)",
+                0.01 * sim.config.kernel.h
+            ),
             bad,
         ))
     }
