@@ -365,6 +365,20 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         }
     };
 
+    let mut periodicity = bisph_core::neighbours::Periodicity::<V>::none();
+    if let Some(d) = &case.domain {
+        for axis in d.periodic_axes() {
+            periodicity.min.set(axis, d.min[axis]);
+            periodicity.length.set(axis, d.max[axis] - d.min[axis]);
+        }
+    }
+    if bisph_core::neighbours::CellGrid::with_period(kernel.support, periodicity).is_err() {
+        return Err(loaded.error(
+            "domain.periodic",
+            "every period must hold at least three kernel supports",
+        ));
+    }
+
     let probes = case
         .probe
         .iter()
@@ -399,6 +413,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         },
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
+        periodicity,
         integrator: Integrator::Verlet,
         // set below, once the initial energies are known
     };

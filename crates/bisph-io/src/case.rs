@@ -252,6 +252,20 @@ pub struct DomainSection {
     pub min: Vec<f64>,
     /// Upper corner.
     pub max: Vec<f64>,
+    /// Periodic axes (`"x"`, `"y"`, `"z"`): the period along each is the domain's extent
+    /// `max - min`; particles leaving one side come back on the other.
+    #[serde(default)]
+    pub periodic: Vec<String>,
+}
+
+impl DomainSection {
+    /// Indices of the periodic axes (unknown names are rejected by `check_case`).
+    pub fn periodic_axes(&self) -> Vec<usize> {
+        self.periodic
+            .iter()
+            .filter_map(|a| ["x", "y", "z"].iter().position(|n| n == a))
+            .collect()
+    }
 }
 
 /// Initial pressure of a fluid block: `"hydrostatic"` or a number [Pa].
@@ -1003,6 +1017,29 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             .all(|(a, b)| b - a < c.resolution.dx)
         {
             return e("resolution.dx", "dx is larger than the domain".into());
+        }
+        let names = &["x", "y", "z"][..d];
+        for (k, a) in dom.periodic.iter().enumerate() {
+            let Some(axis) = names.iter().position(|n| n == a) else {
+                return e(
+                    "domain.periodic",
+                    format!("expected axes among {names:?}, found \"{a}\""),
+                );
+            };
+            if dom.periodic[..k].contains(a) {
+                return e("domain.periodic", format!("axis \"{a}\" is listed twice"));
+            }
+            let support = 2.0 * c.resolution.h_over_dx * c.resolution.dx;
+            let period = dom.max[axis] - dom.min[axis];
+            if period < 3.0 * support {
+                return e(
+                    "domain.periodic",
+                    format!(
+                        "the period along {a} (domain extent {period}) must be at least three kernel supports ({})",
+                        3.0 * support
+                    ),
+                );
+            }
         }
     }
     check_pack(loaded)?;

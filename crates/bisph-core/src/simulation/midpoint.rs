@@ -161,6 +161,7 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(f.density_rate.par_iter())
             .for_each(|(rho, &d)| *rho += d * dt);
+        self.wrap_positions();
         self.time += dt;
         self.step += 1;
         self.last_dt = dt;

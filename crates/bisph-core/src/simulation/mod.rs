@@ -12,7 +12,7 @@ use crate::energy::{fluid_energies, EnergyBudget};
 use crate::eos::Eos;
 use crate::error::SimError;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{compute_rates, DensityDiffusion, RateModel};
@@ -86,6 +86,8 @@ pub struct SimConfig<V: Vector> {
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
+    /// Periodic axes (the period along an axis is the domain's extent there).
+    pub periodicity: Periodicity<V>,
 }
 
 /// Scratch buffers reused every step.
@@ -135,6 +137,10 @@ pub struct Simulation<V: Vector> {
 
 impl<V: Vector> Simulation<V> {
     /// Sets up a simulation and evaluates the rates at time zero.
+    ///
+    /// # Panics
+    /// When a period of `config.periodicity` holds fewer than three kernel supports (check it
+    /// first with [`CellGrid::with_period`]).
     pub fn new(
         config: SimConfig<V>,
         fluid: Fluid<V>,
@@ -158,7 +164,14 @@ impl<V: Vector> Simulation<V> {
             timings: PhaseTimes::default(),
             scratch: Scratch::default(),
         };
-        sim.walls.grid = CellGrid::new(cell);
+        let period = sim.config.periodicity;
+        let grid = CellGrid::with_period(cell, period)
+            .expect("periods must hold three kernel supports (checked by the caller)");
+        sim.fluid_grid = grid.clone();
+        sim.walls.grid = grid;
+        sim.walls.periodicity = period;
+        sim.walls.wrap_elements();
+        sim.wrap_positions();
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
         sim.rebuild_grid(true);
@@ -216,6 +229,17 @@ impl<V: Vector> Simulation<V> {
                 scale: c.delta * c.kernel.h * c0,
                 hydrostatic_gradient,
             },
+        }
+    }
+
+    /// Brings every particle back into the primary period along the periodic axes.
+    pub(crate) fn wrap_positions(&mut self) {
+        let period = self.config.periodicity;
+        if period.any() {
+            self.fluid
+                .position
+                .par_iter_mut()
+                .for_each(|r| *r = period.wrap(*r));
         }
     }
 

@@ -49,6 +49,7 @@ impl<V: Vector> Simulation<V> {
             p.velocity += half * p.acceleration;
             p.position += dt * p.velocity;
         }
+        self.wrap_positions();
         let power_before = self.wall_power;
         self.time += dt;
         self.step += 1;

@@ -254,8 +254,8 @@ pub fn gamma<V: Vector>(
     let eps = 1e-12 * kernel.h;
     let radius = kernel.support + elements.max_reach;
     let x0 = x;
-    grid.for_each_candidate_within(x0, radius, |j| {
-        let r = elements.centre[j] - x0;
+    grid.for_each_candidate_within_shifted(x0, radius, |j, shift| {
+        let r = elements.centre[j] + shift - x0;
         let rn = r.dot(elements.normal[j]);
         if rn.abs() < eps
             && (r - elements.normal[j] * rn).length() <= elements.reach[j] * (1.0 + 1e-12)
@@ -264,10 +264,11 @@ pub fn gamma<V: Vector>(
         }
     });
     let mut gamma = 1.0;
-    grid.for_each_candidate_within(x, radius, |j| {
+    grid.for_each_candidate_within_shifted(x, radius, |j, shift| {
+        // The element's corners are stored at its own image: move the point instead.
         gamma += V::wall_gamma_contribution(
             kernel,
-            x,
+            x - shift,
             elements.current_corners(j),
             elements.normal[j],
             elements.area[j],

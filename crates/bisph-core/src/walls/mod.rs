@@ -11,7 +11,7 @@ pub mod shepard_bi;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
 pub use bodies::{Body, Kinematics, Motion, Piston, PrescribedMotion};
 
@@ -112,6 +112,9 @@ pub struct Walls<V: Vector> {
     pub placed_at: f64,
     /// Elements that stretch with a piston so their number stays constant.
     pub stretch: Vec<Stretch>,
+    /// Periodic axes: element centres are kept in the primary period (their corners move with
+    /// them), so an element straddling the period is seen from both sides through the grid.
+    pub periodicity: Periodicity<V>,
 }
 
 /// Wall elements aligned with a piston's axis that stretch affinely between a fixed anchor
@@ -139,6 +142,7 @@ impl<V: Vector> Walls<V> {
             grid: CellGrid::new(cell_size),
             placed_at: 0.0,
             stretch: Vec::new(),
+            periodicity: Periodicity::none(),
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
@@ -177,7 +181,26 @@ impl<V: Vector> Walls<V> {
             }
         }
         self.place_stretching(true);
+        self.wrap_elements();
         self.grid.rebuild(&self.elements.centre);
+    }
+
+    /// Moves every element whose centre left the primary period back by whole periods (its
+    /// corners with it).
+    pub fn wrap_elements(&mut self) {
+        if !self.periodicity.any() {
+            return;
+        }
+        let e = &mut self.elements;
+        for j in 0..e.len() {
+            let shift = self.periodicity.wrap(e.centre[j]) - e.centre[j];
+            if shift != V::ZERO {
+                e.centre[j] += shift;
+                for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
+                    e.corners[m] += shift;
+                }
+            }
+        }
     }
 
     /// Sets the element velocities of moving bodies to their values at time `t`, keeping the
