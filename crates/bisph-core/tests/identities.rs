@@ -91,6 +91,8 @@ fn powers<V: Vector>(
             scale: 0.0,
             hydrostatic_gradient: V::ZERO,
         },
+        viscosity: Default::default(),
+        body_force: V::ZERO,
     };
     let volume: Vec<f64> = state
         .mass

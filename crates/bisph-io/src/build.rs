@@ -414,6 +414,25 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
         periodicity,
+        viscosity: bisph_core::terms::Viscosity {
+            nu: case.fluid.viscosity,
+            min_wall_distance: dx,
+        },
+        flux: case.flux.as_ref().map(|f| {
+            let direction = V::from_slice(&f.direction);
+            let centre = (domain_min + domain_max) * 0.5;
+            bisph_core::forcing::FluxControl {
+                direction: direction / direction.length(),
+                target_velocity: f.flux / f.area,
+                area: f.area,
+                slice_point: f.slice_point.as_deref().map_or(centre, V::from_slice),
+                slice_width: f.slice_width.unwrap_or(2.0 * dx),
+                rule: match f.rule {
+                    crate::case::FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
+                    crate::case::FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
+                },
+            }
+        }),
         integrator: Integrator::Verlet,
         // set below, once the initial energies are known
     };

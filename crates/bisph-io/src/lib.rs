@@ -11,6 +11,7 @@ pub mod pack;
 pub mod pack_cases;
 pub mod paper1_cases;
 pub mod paper2_cases;
+pub mod paper3_cases;
 pub mod plot;
 pub mod regions;
 pub mod runner;

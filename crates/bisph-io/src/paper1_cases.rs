@@ -17,7 +17,7 @@ pub fn cases() -> Vec<Box<dyn ValidationCase>> {
 }
 
 /// A case file shipped in `cases/`, embedded so `bisph validate` runs from anywhere.
-fn load(name: &str, text: &str, overrides: &[&str]) -> Result<LoadedCase, String> {
+pub(crate) fn load(name: &str, text: &str, overrides: &[&str]) -> Result<LoadedCase, String> {
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     parse_case(&format!("cases/{name}.toml"), text, &overrides).map_err(|e| e.to_string())
 }
@@ -56,7 +56,7 @@ pub fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Result<Vec
         .collect())
 }
 
-fn plot(
+pub(crate) fn plot(
     out: &Path,
     file: &str,
     title: &str,
@@ -75,7 +75,7 @@ fn plot(
     Ok(path)
 }
 
-fn line(label: &str, x: Vec<f64>, y: Vec<f64>) -> (Series, Style) {
+pub(crate) fn line(label: &str, x: Vec<f64>, y: Vec<f64>) -> (Series, Style) {
     (
         Series {
             label: label.into(),

@@ -137,9 +137,25 @@ pub fn run<V: CaseDim>(
             "potential",
             "wall_work",
             "total",
+            "viscous_dissipation",
+            "forcing_work",
         ]
         .map(String::from),
     )?;
+    let mut flux_csv = match sim.config.flux {
+        Some(_) => Some(Series::create(
+            out.join("flux.csv"),
+            &[
+                "t",
+                "bulk_velocity",
+                "target_velocity",
+                "force",
+                "relative_error",
+            ]
+            .map(String::from),
+        )?),
+        None => None,
+    };
     let mut force_header = vec![
         "t".to_string(),
         "body".to_string(),
@@ -190,7 +206,7 @@ pub fn run<V: CaseDim>(
 
     let scale = energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity);
     let e0 = sim.energy();
-    let mut history: Vec<[f64; 6]> = Vec::new();
+    let mut history: Vec<[f64; 8]> = Vec::new();
     let mut probe_history: Vec<Vec<f64>> = Vec::new();
     let mut max_drift: f64 = 0.0;
     let mut max_speed: f64 = 0.0;
@@ -212,8 +228,29 @@ pub fn run<V: CaseDim>(
                 e.potential,
                 e.wall_work,
                 e.total,
+                e.viscous_dissipation,
+                e.forcing_work,
             ];
             energy_csv.row(&row)?;
+            if let (Some(csv), Some(flux)) = (flux_csv.as_mut(), sim.config.flux) {
+                let bulk = sim.bulk_velocity();
+                let target = flux.target_velocity;
+                csv.row(&[
+                    t,
+                    bulk,
+                    target,
+                    sim.flux_history.force,
+                    (bulk - target) / target,
+                ])?;
+                // The driving force on the whole fluid, `F sum_i m_i`.
+                let total_mass: f64 = sim.fluid.mass.iter().sum();
+                let force = sim.body_force * total_mass;
+                let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
+                if V::DIM == 3 {
+                    values.extend([0.0; 3]);
+                }
+                forces_csv.named_row(t, "driving", &values)?;
+            }
             history.push(row);
             for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
                 let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
@@ -320,19 +357,33 @@ pub fn run<V: CaseDim>(
 
 fn write_plots(
     out: &Path,
-    history: &[[f64; 6]],
+    history: &[[f64; 8]],
     probe_header: &[String],
     probes: &[Vec<f64>],
 ) -> Result<(), OutputError> {
     let column = |k: usize| history.iter().map(|r| r[k]).collect::<Vec<f64>>();
     let t = column(0);
     let e0 = history.first().map(|r| r[5]).unwrap_or(0.0);
-    let names = ["kinetic", "compressible", "potential", "wall_work", "total"];
-    let series = names
+    let all = [
+        "kinetic",
+        "compressible",
+        "potential",
+        "wall_work",
+        "total",
+        "viscous_dissipation",
+        "forcing_work",
+    ];
+    // Columns 6 and 7 only when they are used; `k + 1` is the column of `all[k]`.
+    let shown: Vec<(usize, &str)> = all
         .iter()
+        .copied()
         .enumerate()
-        .map(|(k, name)| {
-            let base = if *name == "potential" || *name == "total" {
+        .filter(|&(k, _)| k < 5 || history.iter().any(|r| r[k + 1] != 0.0))
+        .collect();
+    let series = shown
+        .iter()
+        .map(|&(k, name)| {
+            let base = if name == "potential" || name == "total" {
                 history.first().map(|r| r[k + 1]).unwrap_or(0.0)
             } else {
                 0.0

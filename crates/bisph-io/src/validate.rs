@@ -132,6 +132,7 @@ pub fn registry() -> Vec<Box<dyn ValidationCase>> {
     let mut cases = Vec::new();
     cases.extend(crate::paper1_cases::cases());
     cases.extend(crate::paper2_cases::cases());
+    cases.extend(crate::paper3_cases::cases());
     cases.extend(crate::pack_cases::cases());
     cases
 }

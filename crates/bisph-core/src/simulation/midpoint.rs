@@ -122,6 +122,7 @@ impl<V: Vector> Simulation<V> {
         self.last_iterations = iterations;
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;
+        self.viscous_dissipation += dt * self.viscous_power;
         for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
             p.position += dt * (v0 + half * p.acceleration);
             p.velocity = v0 + dt * p.acceleration;

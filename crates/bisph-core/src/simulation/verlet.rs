@@ -51,6 +51,7 @@ impl<V: Vector> Simulation<V> {
         }
         self.wrap_positions();
         let power_before = self.wall_power;
+        let viscous_before = self.viscous_power;
         self.time += dt;
         self.step += 1;
         self.last_dt = dt;
@@ -84,6 +85,7 @@ impl<V: Vector> Simulation<V> {
                 .for_each(|(rho, &drho)| *rho += drho * half);
         }
         self.wall_work += half * (power_before + self.wall_power);
+        self.viscous_dissipation += half * (viscous_before + self.viscous_power);
         self.refresh_pressure();
         self.last_iterations = 1;
         self.last_residue = 0.0;

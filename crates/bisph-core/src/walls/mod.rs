@@ -13,6 +13,7 @@ use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
+use crate::terms::Viscosity;
 pub use bodies::{Body, Kinematics, Motion, Piston, PrescribedMotion};
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
@@ -341,6 +342,32 @@ pub trait WallModel<V: Vector>: Sync {
         _grid: &CellGrid<V>,
     ) -> f64 {
         discrete
+    }
+
+    /// Wall part of the viscous acceleration of a particle at `x` with velocity `u`: the
+    /// laminar wall shear of paper 3 eqs 18-20, [`Viscosity::wall_shear`] summed over the
+    /// elements with `|grad gamma_is| = W_is s_s` (one-point quadrature). Models with an
+    /// exact `grad gamma` override it.
+    fn wall_viscous(
+        &self,
+        kernel: &Wendland,
+        viscosity: &Viscosity,
+        x: V,
+        u: V,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> V {
+        let mut a = V::ZERO;
+        grid.for_each_neighbour(x, &elements.centre, kernel.support, |s, r_is, r| {
+            a += viscosity.wall_shear(
+                u,
+                elements.velocity[s],
+                r_is,
+                elements.normal[s],
+                kernel.value(r) * elements.area[s],
+            );
+        });
+        a
     }
 
     /// Wall sums for a fluid particle at `x` with velocity `u` and pressure `p`.
