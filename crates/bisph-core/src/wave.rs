@@ -50,8 +50,21 @@ pub struct Wave1d {
     pub time: f64,
     /// Fluid neighbours of each particle: `(b, F_ab)`.
     neighbours: Vec<Vec<(usize, f64)>>,
-    /// Particles seen by each wall: `(a, W_as)`.
-    wall_neighbours: [Vec<(usize, f64)>; 2],
+    /// Particles seen by each wall: `(a, W_as, F_as)`.
+    wall_neighbours: [Vec<(usize, f64, f64)>; 2],
+    /// Volume of the vertex particle at each end (0: no vertex particles).
+    pub vertex_volume: f64,
+}
+
+/// Where the particles sit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WaveLayout {
+    /// Fluid particles at `(a + 1/2) dx`; the walls enter through the boundary term only.
+    Staggered,
+    /// Fluid particles at `a dx`, `0 < a < n`, and a vertex particle of volume `dx/2` on each
+    /// wall carrying the wall value `beta_1` in the particle sum of eq 18 (the semi-analytical
+    /// layout of paper 3).
+    Vertex,
 }
 
 impl Wave1d {
@@ -62,6 +75,7 @@ impl Wave1d {
         x0: f64,
         length: f64,
         n: usize,
+        layout: WaveLayout,
         h_over_dx: f64,
         conditions: [RobinCondition; 2],
         order: usize,
@@ -71,7 +85,10 @@ impl Wave1d {
     ) -> Self {
         let dx = length / n as f64;
         let kernel = Wendland::new(h_over_dx * dx, 1);
-        let x: Vec<f64> = (0..n).map(|a| x0 + (a as f64 + 0.5) * dx).collect();
+        let (x, vertex_volume): (Vec<f64>, f64) = match layout {
+            WaveLayout::Staggered => ((0..n).map(|a| x0 + (a as f64 + 0.5) * dx).collect(), 0.0),
+            WaveLayout::Vertex => ((1..n).map(|a| x0 + a as f64 * dx).collect(), 0.5 * dx),
+        };
         let support = kernel.support;
         let neighbours = x
             .iter()
@@ -108,7 +125,10 @@ impl Wave1d {
             x.iter()
                 .enumerate()
                 .filter(|&(_, &xa)| (xa - w.position).abs() < support)
-                .map(|(a, &xa)| (a, kernel.value((xa - w.position).abs())))
+                .map(|(a, &xa)| {
+                    let r = (xa - w.position).abs();
+                    (a, kernel.value(r), kernel.gradient_factor(r))
+                })
                 .collect()
         });
         let u: Vec<f64> = x.iter().map(|&xa| u0(xa)).collect();
@@ -125,6 +145,7 @@ impl Wave1d {
             time: 0.0,
             neighbours,
             wall_neighbours,
+            vertex_volume,
         };
         // u^{-1} such that the central step gives u^1 = u^0 + dt v0 + dt^2/2 Lap(u^0).
         let lap = solver.laplacian(&solver.u);
@@ -140,11 +161,13 @@ impl Wave1d {
     pub fn wall_values(&self, u: &[f64]) -> [f64; 2] {
         let mut values = [0.0; 2];
         for (s, wall) in self.walls.iter().enumerate() {
-            let samples = self.wall_neighbours[s].iter().map(|&(a, w)| RobinSample {
-                offset: DVec2::new(self.x[a] - wall.position, 0.0),
-                value: u[a],
-                weight: self.dx * w,
-            });
+            let samples = self.wall_neighbours[s]
+                .iter()
+                .map(|&(a, w, _)| RobinSample {
+                    offset: DVec2::new(self.x[a] - wall.position, 0.0),
+                    value: u[a],
+                    weight: self.dx * w,
+                });
             values[s] = wall_value(
                 &wall.condition,
                 self.order,
@@ -169,8 +192,8 @@ impl Wave1d {
             .collect();
         for (s, wall) in self.walls.iter().enumerate() {
             let flux = wall.condition.normal_derivative(beta[s]);
-            for &(a, w) in &self.wall_neighbours[s] {
-                lap[a] -= 2.0 * flux * w;
+            for &(a, w, f) in &self.wall_neighbours[s] {
+                lap[a] += 2.0 * self.vertex_volume * (u[a] - beta[s]) * f - 2.0 * flux * w;
             }
         }
         for (l, g) in lap.iter_mut().zip(&self.gamma) {
@@ -300,6 +323,7 @@ mod tests {
             0.0,
             1.0,
             100,
+            WaveLayout::Staggered,
             2.0,
             [RobinCondition::neumann(0.0); 2],
             2,

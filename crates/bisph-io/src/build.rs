@@ -416,7 +416,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         periodicity,
         viscosity: bisph_core::terms::Viscosity {
             nu: case.fluid.viscosity,
-            min_wall_distance: dx,
+            min_wall_distance: 0.5 * dx,
         },
         flux: case.flux.as_ref().map(|f| {
             let direction = V::from_slice(&f.direction);

@@ -129,6 +129,19 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
             wall_viscous: total_viscous - viscous,
         };
     }
+    // Paper 3 eq 18 divides the Laplacian by gamma_i, the kernel's integral over the fluid;
+    // models that do not renormalise take it from the wall geometry (paper 2), which is
+    // exactly 1 away from walls, so fluid pairs there stay antisymmetric.
+    let (viscous, wall_viscous) = if viscid {
+        let gamma = crate::walls::geometric_shepard::gamma(kernel, x_i, elements, wall_grid);
+        if gamma > 0.0 && gamma != 1.0 {
+            (viscous / gamma, wall_viscous / gamma)
+        } else {
+            (viscous, wall_viscous)
+        }
+    } else {
+        (viscous, wall_viscous)
+    };
     Operators {
         pressure_gradient: grad_p,
         velocity_divergence: div_u,
