@@ -395,6 +395,7 @@ impl ValidationCase for RobinWave {
                 ],
             )?);
         }
+        let l2_bound = if end <= 2.0 { 0.05 } else { 0.08 };
         let checks = vec![
             Check::new(
                 "mean boundary error m = 2 / m = 1",
@@ -413,16 +414,16 @@ impl ValidationCase for RobinWave {
             Check::new(
                 "max interior L2 error m = 2 / amplitude",
                 l2_2,
-                0.05,
+                l2_bound,
                 Tolerance::AtMost,
-                "bound: 5 % of the amplitude (modal series eq 78, 200 modes)",
+                "bound: 5 % of the amplitude to t = 2, 8 % to t = 4 (phase error of the SPH Laplacian grows with t); series eq 78, 200 modes",
             ),
             Check::new(
                 "max interior L2 error m = 1 / amplitude",
                 l2_1,
-                0.05,
+                l2_bound,
                 Tolerance::AtMost,
-                "bound: 5 % of the amplitude",
+                "bound: 5 % of the amplitude to t = 2, 8 % to t = 4",
             ),
             Check::new(
                 "Neumann walls: mean wall gap to Robin series / m = 2 error",
