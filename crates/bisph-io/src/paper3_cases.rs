@@ -93,7 +93,12 @@ impl ValidationCase for PoiseuilleFlux {
         let settings: Vec<String> = if quick {
             vec![]
         } else {
-            vec!["resolution.dx=0.025".into(), "time.dt=5e-4".into()]
+            // dt at 0.4 of the viscous limit 0.125 h^2 / nu, as in the quick run.
+            vec![
+                "resolution.dx=0.025".into(),
+                "time.dt=2.5e-4".into(),
+                "time.end=2.0".into(),
+            ]
         };
         let r58 = run_flux(&settings, "eq58")?;
         let r63 = run_flux(&settings, "eq63")?;
