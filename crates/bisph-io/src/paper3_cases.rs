@@ -31,6 +31,7 @@ struct FluxRun {
     particles: usize,
     steps: u64,
     energy_residual: f64,
+    dt: f64,
 }
 
 fn run_flux(settings: &[String], rule: &str) -> Result<FluxRun, String> {
@@ -72,6 +73,7 @@ fn run_flux(settings: &[String], rule: &str) -> Result<FluxRun, String> {
         particles: sim.fluid.len(),
         steps: sim.step,
         energy_residual: e.total / e.forcing_work.abs().max(1e-300),
+        dt: loaded.case.time.dt.unwrap_or(f64::NAN),
     })
 }
 
@@ -166,9 +168,10 @@ impl ValidationCase for PoiseuilleFlux {
             Check::new(
                 "eq 58: mean |bulk error| last 10% of run",
                 e58,
-                0.01,
-                Tolerance::Relative(0.5),
-                "paper 3 fig 4: close to 1 % (2 dt F / v here)",
+                // Eq 58 settles where F = (v - v~) / (2 dt): v~ / v - 1 = -2 dt F / v.
+                2.0 * r58.dt * 12.0 * 0.5,
+                Tolerance::Relative(0.2),
+                "2 dt F / v with the analytic F = 12 nu v / H^2 (paper 3 fig 4: close to 1 %)",
             ),
             Check::new(
                 "error ratio eq 58 / eq 63",
