@@ -25,6 +25,7 @@ pub mod quadrature;
 pub mod region;
 pub mod robin;
 pub mod simulation;
+pub mod surface;
 pub mod terms;
 pub mod walls;
 pub mod wave;

@@ -24,6 +24,13 @@ pub struct Fluid<V: Vector> {
     pub acceleration: Vec<V>,
     /// Density rates `drho_i/dt` from the last rate evaluation.
     pub density_rate: Vec<f64>,
+    /// Integrated Shepard factor `gamma_i` (paper 3, eq 4; 1 when unused).
+    pub gamma: Vec<f64>,
+    /// `grad gamma_i` at the current position (paper 3, eq 10; zero when unused).
+    pub grad_gamma: Vec<V>,
+    /// Density by summation (paper 3, eq 84): `C_i` in
+    /// `gamma_i rho_i = sum_P m_j W_ij + C_i`, the accumulated diffusion (zero when unused).
+    pub density_offset: Vec<f64>,
 }
 
 impl<V: Vector> Fluid<V> {
@@ -47,6 +54,9 @@ impl<V: Vector> Fluid<V> {
         self.pressure.push(pressure);
         self.acceleration.push(V::ZERO);
         self.density_rate.push(0.0);
+        self.gamma.push(1.0);
+        self.grad_gamma.push(V::ZERO);
+        self.density_offset.push(0.0);
     }
 
     /// Reorders every array so that new entry `k` is old entry `order[k]`.
@@ -59,6 +69,9 @@ impl<V: Vector> Fluid<V> {
         permute_into(&mut self.mass, order, &mut scratch.scalars);
         permute_into(&mut self.pressure, order, &mut scratch.scalars);
         permute_into(&mut self.density_rate, order, &mut scratch.scalars);
+        permute_into(&mut self.gamma, order, &mut scratch.scalars);
+        permute_into(&mut self.grad_gamma, order, &mut scratch.vectors);
+        permute_into(&mut self.density_offset, order, &mut scratch.scalars);
     }
 }
 
@@ -92,4 +105,6 @@ pub struct FluidState<'a, V> {
     pub pressure: &'a [f64],
     /// Volumes `m / rho` (precomputed once per evaluation: no division per pair).
     pub volume: &'a [f64],
+    /// Integrated Shepard factors (paper 3, eq 4).
+    pub gamma: &'a [f64],
 }

@@ -6,7 +6,7 @@ use bisph_core::geometry::{box_elements_2d, box_elements_3d, polyline_elements, 
 use bisph_core::kernel::Wendland;
 use bisph_core::neighbours::CellGrid;
 use bisph_core::particles::FluidState;
-use bisph_core::terms::{particle_operators, DensityDiffusion, RateModel};
+use bisph_core::terms::{particle_operators, DensityDiffusion, DiffusionForm, RateModel};
 use bisph_core::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
 use bisph_core::walls::BoundaryElements;
 use bisph_core::Vector;
@@ -90,9 +90,12 @@ fn powers<V: Vector>(
         diffusion: DensityDiffusion {
             scale: 0.0,
             hydrostatic_gradient: V::ZERO,
+            form: DiffusionForm::Laplacian,
         },
         viscosity: Default::default(),
         body_force: V::ZERO,
+        density_power: 0,
+        summation_density: false,
     };
     let volume: Vec<f64> = state
         .mass
@@ -100,6 +103,7 @@ fn powers<V: Vector>(
         .zip(&state.density)
         .map(|(m, rho)| m / rho)
         .collect();
+    let gamma = vec![1.0; state.position.len()];
     let view = FluidState {
         volume: &volume,
         position: &state.position,
@@ -107,6 +111,7 @@ fn powers<V: Vector>(
         density: &state.density,
         mass: &state.mass,
         pressure: &state.pressure,
+        gamma: &gamma,
     };
     let mut grid = CellGrid::new(kernel.support);
     grid.rebuild(&state.position);

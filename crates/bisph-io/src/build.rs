@@ -7,9 +7,13 @@ use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::{self, ElementShape};
 use bisph_core::packing::WallIntegrals;
 use bisph_core::probes::{Probe, ProbeKind};
+use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
-use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
+use bisph_core::walls::usaw::WallInterpolation;
+use bisph_core::walls::{
+    Body, BoundaryElements, Coupling, FreeBody, Motion, Piston, PrescribedMotion, Stretch, Walls,
+};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
 use glam::{DVec2, DVec3};
 
@@ -23,8 +27,13 @@ pub trait CaseDim: Vector + WallIntegrals {
         dx: f64,
         element_size: f64,
     ) -> Result<BlockRegion<Self>, CaseError>;
-    /// Boundary elements of one `[[wall]]` of about `size`.
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>>;
+    /// Boundary elements of one `[[wall]]` (`key`) of about `size`.
+    fn wall_shapes(
+        loaded: &LoadedCase,
+        key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError>;
     /// Lattice points of one `[[fluid_block]]`.
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self>;
 }
@@ -54,12 +63,17 @@ impl CaseDim for DVec2 {
             element_size,
         )
     }
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
-        match wall.shape.as_str() {
+    fn wall_shapes(
+        _loaded: &LoadedCase,
+        _key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
+        Ok(match wall.shape.as_str() {
             "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
             "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
             _ => geometry::polyline_elements(&points2(&wall.points), false, size),
-        }
+        })
     }
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
         match block.shape.as_str() {
@@ -86,8 +100,21 @@ impl CaseDim for DVec3 {
             element_size,
         )
     }
-    fn wall_shapes(wall: &WallSpec, size: f64) -> Vec<ElementShape<Self>> {
-        geometry::box_elements_3d(vec3(&wall.min), vec3(&wall.max), &wall.open, size)
+    fn wall_shapes(
+        loaded: &LoadedCase,
+        key: &str,
+        wall: &WallSpec,
+        size: f64,
+    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
+        match wall.shape.as_str() {
+            "mesh" | "capsule" => crate::mesh_walls::wall_elements(loaded, key, wall, size),
+            _ => Ok(geometry::box_elements_3d(
+                vec3(&wall.min),
+                vec3(&wall.max),
+                &wall.open,
+                size,
+            )),
+        }
     }
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
         geometry::lattice_box(vec3(&block.min), vec3(&block.max), dx)
@@ -209,13 +236,30 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
 
     let mut elements = BoundaryElements::default();
     let mut stretch: Vec<Stretch> = Vec::new();
+    let mut body_surfaces: Vec<(usize, bisph_core::surface::Surface)> = Vec::new();
     let element_size = dx * case.resolution.element_over_dx;
     for (k, w) in case.wall.iter().enumerate() {
+        let element_size = w.element_size.unwrap_or(element_size);
         let body = match &w.body {
             None => 0,
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
         };
-        let shapes = V::wall_shapes(w, element_size);
+        let mut shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
+        if w.shape == "box" && w.fluid.as_deref() == Some("outside") {
+            // A box obstacle or body: normals into the box, out of the fluid around it.
+            for s in &mut shapes {
+                s.normal = -s.normal;
+                s.corners.reverse();
+            }
+        }
+        if V::DIM == 3 && body > 0 && (w.shape == "mesh" || w.shape == "capsule") {
+            let mut surface =
+                crate::mesh_walls::wall_surface(loaded, &format!("wall[{k}]"), w, element_size)?;
+            if surface.volume() < 0.0 {
+                surface.flip();
+            }
+            body_surfaces.push((body as usize, surface));
+        }
         if shapes.is_empty() {
             return Err(loaded.error(
                 &format!("wall[{k}]"),
@@ -240,6 +284,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             });
         }
     }
+    free_bodies::<V>(loaded, &mut bodies, &body_surfaces, gravity, &elements)?;
     // Pistons: outside force = outside pressure x piston area; reference face along the axis.
     for (k, b) in case.body.iter().enumerate() {
         let (Some(spec), Motion::Piston(p)) = (&b.piston, &mut bodies[k + 1].motion) else {
@@ -384,10 +429,10 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         .iter()
         .map(|p| Probe {
             name: p.name.clone(),
-            kind: if p.kind == "wall_pressure" {
-                ProbeKind::WallPressure
-            } else {
-                ProbeKind::Pressure
+            kind: match p.kind.as_str() {
+                "wall_pressure" => ProbeKind::WallPressure,
+                "height" => ProbeKind::Height,
+                _ => ProbeKind::Pressure,
             },
             position: V::from_slice(&p.position),
         })
@@ -409,8 +454,35 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi(match case.shepard {
                 crate::case::ShepardName::Discrete => ShepardKind::Discrete,
                 crate::case::ShepardName::Geometric => ShepardKind::Geometric,
+                crate::case::ShepardName::Integrated => ShepardKind::Integrated,
+            }),
+            crate::case::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
+                interpolation: match case.usaw.wall_interpolation {
+                    crate::case::WallInterpolationName::Shepard => WallInterpolation::Shepard,
+                    crate::case::WallInterpolationName::Neumann => WallInterpolation::Neumann,
+                    crate::case::WallInterpolationName::Hydrostatic => {
+                        WallInterpolation::Hydrostatic
+                    }
+                },
+                geometric_gamma: case.usaw.gamma == crate::case::UsawGammaName::Geometric,
             }),
         },
+        diffusion: match case.fluid.diffusion {
+            crate::case::DiffusionName::Delta => DiffusionChoice::Delta,
+            crate::case::DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
+                eta: case.fluid.eta,
+            },
+            crate::case::DiffusionName::Ferrari => DiffusionChoice::Ferrari {
+                coefficient: case.fluid.ferrari_coefficient,
+            },
+        },
+        density_power: if case.boundary == crate::case::BoundaryName::Usaw {
+            case.usaw.density_power
+        } else {
+            0
+        },
+        particle_spacing: case.resolution.dx,
+        summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
         periodicity,
@@ -465,6 +537,145 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     let mut walls = Walls::new(elements, bodies, kernel.support);
     walls.stretch = stretch;
     Ok(Simulation::new(config, fluid, walls, probes))
+}
+
+/// Sets up the free bodies of a case: mass, centre of mass and inertia (given, or from the
+/// body's closed mesh walls), initial attitude, velocities, locks and coupling.
+fn free_bodies<V: CaseDim>(
+    loaded: &LoadedCase,
+    bodies: &mut [Body<V>],
+    surfaces: &[(usize, bisph_core::surface::Surface)],
+    gravity: V,
+    elements: &BoundaryElements<V>,
+) -> Result<(), CaseError> {
+    use glam::{DMat3, DQuat};
+    for (k, b) in loaded.case.body.iter().enumerate() {
+        let Some(spec) = &b.free else { continue };
+        let key = format!("body[{k}].free");
+        if !elements.body.iter().any(|&j| j as usize == k + 1) {
+            return Err(loaded.error(&key, "no [[wall]] belongs to this free body"));
+        }
+        // Solid from the body's mesh walls (uniform density).
+        let mine: Vec<&bisph_core::surface::Surface> = surfaces
+            .iter()
+            .filter(|(i, _)| *i == k + 1)
+            .map(|(_, s)| s)
+            .collect();
+        let solid = if mine.is_empty() {
+            None
+        } else {
+            let (mut m, mut first, mut inertia) = (0.0, DVec3::ZERO, DMat3::ZERO);
+            // Inertia about the origin, summed, then moved to the common centre of mass.
+            let outer = |v: DVec3| DMat3::from_cols(v * v.x, v * v.y, v * v.z);
+            let about_origin = |mass: f64, c: DVec3, i: DMat3| {
+                let shift = DMat3::IDENTITY * c.length_squared() - outer(c);
+                i + shift * mass
+            };
+            for s in &mine {
+                let (mi, ci, ii) = s.mass_properties(1.0);
+                m += mi;
+                first += ci * mi;
+                inertia += about_origin(mi, ci, ii);
+            }
+            let c = first / m;
+            let about_c = inertia - (DMat3::IDENTITY * c.length_squared() - outer(c)) * m;
+            Some((m, c, about_c))
+        };
+        let (mass, density) = match (spec.mass, spec.density, &solid) {
+            (Some(m), _, Some((volume, _, _))) => (m, m / volume),
+            (Some(m), _, None) => (m, 0.0),
+            (None, Some(rho), Some((volume, _, _))) => (rho * volume, rho),
+            (None, Some(_), None) => return Err(loaded.error(
+                &format!("{key}.density"),
+                "a density needs closed mesh walls (shape = \"mesh\" or \"capsule\") on this body",
+            )),
+            (None, None, _) => {
+                return Err(loaded.error(&format!("{key}.mass"), "missing: a mass or a density"))
+            }
+        };
+        let mut angles = [0.0; 3];
+        match &spec.rotate {
+            Some(crate::case::Angles::One(a)) => angles[2] = a.to_radians(),
+            Some(crate::case::Angles::Many(v)) => {
+                if V::DIM == 2 {
+                    angles[2] = v.first().copied().unwrap_or(0.0).to_radians();
+                } else {
+                    for (i, a) in v.iter().take(3).enumerate() {
+                        angles[i] = a.to_radians();
+                    }
+                }
+            }
+            None => {}
+        }
+        let attitude = DQuat::from_rotation_z(angles[2])
+            * DQuat::from_rotation_y(angles[1])
+            * DQuat::from_rotation_x(angles[0]);
+        let inertia = match &spec.inertia {
+            Some(i) if V::DIM == 2 => DMat3::from_diagonal(DVec3::new(1.0, 1.0, i[0])),
+            Some(i) if i.len() == 3 => DMat3::from_diagonal(DVec3::new(i[0], i[1], i[2])),
+            Some(i) => {
+                DMat3::from_cols_array(&[i[0], i[3], i[6], i[1], i[4], i[7], i[2], i[5], i[8]])
+            }
+            None => match &solid {
+                // World-axes tensor of the solid at time zero, in body axes.
+                Some((_, _, i)) => {
+                    let r = DMat3::from_quat(attitude);
+                    r.transpose() * (*i * density) * r
+                }
+                None => {
+                    return Err(loaded.error(
+                        &format!("{key}.inertia"),
+                        "missing: give the inertia, or closed mesh walls to compute it from",
+                    ))
+                }
+            },
+        };
+        if inertia.determinant().abs() < f64::MIN_POSITIVE || !inertia.is_finite() {
+            return Err(loaded.error(&format!("{key}.inertia"), "a singular inertia tensor"));
+        }
+        let centre = match (&b.centre, &solid) {
+            (Some(c), _) => V::from_slice(c),
+            (None, Some((_, c, _))) => V::from_slice(&c.to_array()),
+            (None, None) => {
+                return Err(loaded.error(
+                    &format!("body[{k}].centre"),
+                    "missing: the centre of mass (no closed mesh wall to compute it from)",
+                ))
+            }
+        };
+        let g = DVec3::from_array(gravity.to_xyz());
+        let mut free = FreeBody::new(mass, inertia, attitude, g);
+        if let Some(v) = &spec.velocity {
+            free.velocity = DVec3::from_array(V::from_slice(v).to_xyz());
+        }
+        if let Some(w) = &spec.angular_velocity {
+            free.angular_velocity = if V::DIM == 2 {
+                DVec3::new(0.0, 0.0, w[0])
+            } else {
+                DVec3::from_slice(w)
+            };
+        }
+        let axis = |a: &str| match a {
+            "x" => 0,
+            "y" => 1,
+            _ => 2,
+        };
+        for a in &spec.lock_translation {
+            free.locked_translation[axis(a)] = true;
+        }
+        for a in &spec.lock_rotation {
+            free.locked_rotation[axis(a)] = true;
+        }
+        if V::DIM == 2 {
+            free = free.planar();
+        }
+        if spec.coupling.as_deref() == Some("staggered") {
+            free.coupling = Coupling::Staggered;
+        }
+        bodies[k + 1].centre = centre;
+        bodies[k + 1].motion = Motion::Free(free);
+    }
+    Ok(())
 }
 
 fn eos_background(eos: &Eos) -> f64 {

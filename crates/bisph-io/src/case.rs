@@ -50,6 +50,8 @@ pub enum BoundaryName {
     Energy,
     /// Classic boundary integrals with discrete Shepard renormalisation (paper 1, eqs 24-25).
     Bi,
+    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
+    Usaw,
 }
 
 /// Shepard factor name.
@@ -61,6 +63,74 @@ pub enum ShepardName {
     Discrete,
     /// From the wall elements alone (paper 2).
     Geometric,
+    /// Integrated in time, `dgamma/dt = v_rel . grad gamma` (paper 3, eq 4).
+    Integrated,
+}
+
+/// Density diffusion name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DiffusionName {
+    /// delta-SPH with `fluid.delta`.
+    #[default]
+    Delta,
+    /// Mayrhofer's volume diffusion (paper 3, eqs 44, 48) with `fluid.eta`.
+    Mayrhofer,
+    /// Ferrari's Riemann form (paper 3, eqs 49-51) times `fluid.ferrari_coefficient`.
+    Ferrari,
+}
+
+/// Vertex-value extrapolation name (`usaw.wall_interpolation`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum WallInterpolationName {
+    /// Paper 3, eqs 16-17.
+    #[default]
+    Shepard,
+    /// Neumann with gravity (`dp/dn = rho g . n`), the constraint of eq 82.
+    Neumann,
+    /// Hydrostatic-corrected, eq 83.
+    Hydrostatic,
+}
+
+/// Gamma of the semi-analytical walls (`usaw.gamma`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum UsawGammaName {
+    /// Integrated in time (paper 3, eq 4) from the geometric value.
+    #[default]
+    Integrated,
+    /// Geometric (paper 2) every step.
+    Geometric,
+}
+
+/// `[usaw]`: options of the semi-analytical walls.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct UsawSection {
+    /// Vertex pressure extrapolation.
+    #[serde(default)]
+    pub wall_interpolation: WallInterpolationName,
+    /// How gamma is obtained.
+    #[serde(default)]
+    pub gamma: UsawGammaName,
+    /// The power `k` of the operators (paper 3, eqs 37-38): 0 or 1.
+    #[serde(default)]
+    pub density_power: u8,
+    /// `"differential"` (eq 12, default) or `"summation"` (eqs 13 and 84).
+    #[serde(default)]
+    pub continuity: ContinuityName,
+}
+
+/// Continuity equation of the semi-analytical walls (`usaw.continuity`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContinuityName {
+    /// `drho/dt = -rho Div^{gamma,k}(v)` (paper 3, eq 12).
+    #[default]
+    Differential,
+    /// `gamma rho = sum_P m W` (eq 13) with the diffusion integrated in time (eq 84).
+    Summation,
 }
 
 /// `[fluid]`: material and physics.
@@ -86,13 +156,22 @@ pub struct FluidSection {
     /// delta-SPH coefficient (0 = off).
     #[serde(default)]
     pub delta: f64,
-    /// Hydrostatic correction of the delta-SPH term.
+    /// Hydrostatic correction of the density diffusion (delta-SPH, or paper 3 eq 81).
     #[serde(default = "yes")]
     pub delta_hydrostatic: bool,
     /// Kinematic viscosity `nu` [m^2/s] (0 = inviscid): the Morris Laplacian with the laminar
     /// wall shear (paper 3, eqs 18-20).
     #[serde(default)]
     pub viscosity: f64,
+    /// Density diffusion form.
+    #[serde(default)]
+    pub diffusion: DiffusionName,
+    /// `eta` of Mayrhofer's volume diffusion, `K = c0 dx / eta` (paper 3, eq 48).
+    #[serde(default = "default_eta")]
+    pub eta: f64,
+    /// Multiplier of Ferrari's diffusion term.
+    #[serde(default = "one")]
+    pub ferrari_coefficient: f64,
 }
 
 /// `[flux]`: a driving body force imposing a volume flux (paper 3, section 5).
@@ -123,6 +202,10 @@ pub enum FluxRuleName {
     Eq63,
     /// Paper 3 eq 58.
     Eq58,
+}
+
+fn default_eta() -> f64 {
+    50.0
 }
 
 fn default_tait_exponent() -> f64 {
@@ -274,6 +357,89 @@ impl Default for OutputSection {
             vtk_interval: 0.0,
             series_interval: 0.0,
             plots: true,
+        }
+    }
+}
+
+/// `[checkpoint]`: when `bisph run` saves its state for `--resume` (also on SIGINT/SIGTERM).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSection {
+    /// Write a checkpoint every this many steps (0 = not by steps).
+    #[serde(default)]
+    pub every_steps: u64,
+    /// Write a checkpoint every this many wall-clock minutes (0 = not by time).
+    #[serde(default = "default_checkpoint_minutes")]
+    pub every_minutes: f64,
+    /// Write a checkpoint when the run is interrupted by SIGINT or SIGTERM.
+    #[serde(default = "yes")]
+    pub on_signal: bool,
+}
+
+fn default_checkpoint_minutes() -> f64 {
+    10.0
+}
+
+impl Default for CheckpointSection {
+    fn default() -> Self {
+        CheckpointSection {
+            every_steps: 0,
+            every_minutes: default_checkpoint_minutes(),
+            on_signal: true,
+        }
+    }
+}
+
+/// `[diagnostics]`: divergence watches (see `bisph_io::diagnostics`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DiagnosticsSection {
+    /// Watch at all.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Smallest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_min")]
+    pub density_ratio_min: f64,
+    /// Largest allowed `rho / rho0`.
+    #[serde(default = "default_density_ratio_max")]
+    pub density_ratio_max: f64,
+    /// Largest allowed particle speed over `c0`.
+    #[serde(default = "one")]
+    pub speed_over_c0: f64,
+    /// Smallest allowed time step over the first step's (0 = off).
+    #[serde(default = "default_dt_collapse")]
+    pub dt_collapse: f64,
+    /// Stop when a particle crosses a wall element.
+    #[serde(default = "yes")]
+    pub wall_crossing: bool,
+    /// Largest allowed growth of the total energy over `E_scale` (0 = off).
+    #[serde(default = "default_energy_growth")]
+    pub energy_growth: f64,
+}
+
+fn default_density_ratio_min() -> f64 {
+    0.5
+}
+fn default_density_ratio_max() -> f64 {
+    2.0
+}
+fn default_dt_collapse() -> f64 {
+    1e-3
+}
+fn default_energy_growth() -> f64 {
+    0.5
+}
+
+impl Default for DiagnosticsSection {
+    fn default() -> Self {
+        DiagnosticsSection {
+            enabled: true,
+            density_ratio_min: default_density_ratio_min(),
+            density_ratio_max: default_density_ratio_max(),
+            speed_over_c0: one(),
+            dt_collapse: default_dt_collapse(),
+            wall_crossing: true,
+            energy_growth: default_energy_growth(),
         }
     }
 }
@@ -485,8 +651,33 @@ pub struct PackSection {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
-    /// `"box"`, `"polyline"` or `"polygon"` (2-D).
+    /// `"box"`, `"polyline"` or `"polygon"` (2-D); `"mesh"` (an STL or OBJ file) or
+    /// `"capsule"` (3-D).
     pub shape: String,
+    /// Mesh file (`.stl`, binary or ASCII, or `.obj`), relative to the case file's folder.
+    pub file: Option<String>,
+    /// Length unit of the mesh file: `"m"` (default), `"cm"` or `"mm"`.
+    pub units: Option<String>,
+    /// Uniform scale of a mesh or capsule (after units).
+    pub scale: Option<f64>,
+    /// Rotation of a mesh or capsule in degrees, about x, then y, then z (after scaling).
+    pub rotate: Option<Angles>,
+    /// Translation of a mesh or capsule, applied last.
+    pub translate: Option<Vec<f64>>,
+    /// Which side of a closed mesh the fluid is on: `"inside"` (a tank, default) or
+    /// `"outside"` (an obstacle or a floating body). Closed meshes are oriented automatically.
+    pub fluid: Option<String>,
+    /// A mesh must be closed (every edge shared by two faces; default `true`). An open mesh
+    /// (e.g. a tank without a lid) keeps the normals of its corner order, flipped with `flip`.
+    pub closed: Option<bool>,
+    /// Flip the normals of an open mesh.
+    #[serde(default)]
+    pub flip: bool,
+    /// Dimensions of a `"capsule"` wall.
+    pub capsule: Option<CapsuleSpec>,
+    /// Size of this wall's elements (default `resolution.dx * resolution.element_over_dx`),
+    /// e.g. a finely meshed body in a coarse tank.
+    pub element_size: Option<f64>,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
@@ -500,6 +691,23 @@ pub struct WallSpec {
     pub body: Option<String>,
     /// Stretch with a piston (the wall must lie along the piston axis).
     pub stretch: Option<StretchSpec>,
+}
+
+/// `capsule` of a `[[wall]]`: an Apollo-like capsule (paper 1, 5.4), axis `+z`, heat-shield
+/// apex at the origin before the wall's transform.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CapsuleSpec {
+    /// Radius of the spherical heat shield [m].
+    pub heat_shield_radius: f64,
+    /// Largest diameter [m].
+    pub diameter: f64,
+    /// Radius of the toroidal shoulder [m].
+    pub shoulder_radius: f64,
+    /// Half-angle of the conical afterbody [degrees].
+    pub cone_half_angle: f64,
+    /// Height from the heat-shield apex to the top [m].
+    pub height: f64,
 }
 
 /// `[body.motion]`: prescribed motion (see `PrescribedMotion`).
@@ -557,6 +765,39 @@ pub struct BodySpec {
     pub motion: Option<MotionSpec>,
     /// Piston dynamics (instead of a prescribed motion).
     pub piston: Option<PistonSpec>,
+    /// Free rigid-body dynamics (instead of a prescribed motion or a piston).
+    pub free: Option<FreeSpec>,
+}
+
+/// `[body.free]`: a free rigid body driven by the fluid and gravity. `body.centre` is its
+/// centre of mass (computed from its closed mesh walls when left out).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct FreeSpec {
+    /// Mass [kg] (per unit depth in 2-D). With `density` instead, computed from the body's
+    /// closed mesh walls.
+    pub mass: Option<f64>,
+    /// Uniform density of the solid, for mass and inertia from the body's closed mesh walls.
+    pub density: Option<f64>,
+    /// Inertia about the centre of mass in body axes: 3 principal moments, or 9 numbers
+    /// (row by row) in 3-D; 1 number (`I_zz`) in 2-D. Left out: from the mesh walls
+    /// (uniform density).
+    pub inertia: Option<Vec<f64>>,
+    /// Body axes at time zero: rotation in degrees about x, then y, then z (3-D) or one angle
+    /// (2-D) from the world axes.
+    pub rotate: Option<Angles>,
+    /// Initial velocity of the centre of mass.
+    pub velocity: Option<Vec<f64>>,
+    /// Initial angular velocity in body axes (3-D) or about z (2-D, one number).
+    pub angular_velocity: Option<Vec<f64>>,
+    /// Locked translations (world axes: "x", "y", "z"); they keep their initial velocity.
+    #[serde(default)]
+    pub lock_translation: Vec<String>,
+    /// Locked rotations (body axes: "x", "y", "z"); they keep their initial rate.
+    #[serde(default)]
+    pub lock_rotation: Vec<String>,
+    /// `"iterated"` (default: inside the midpoint iterations) or `"staggered"`.
+    pub coupling: Option<String>,
 }
 
 /// `stretch` of a `[[wall]]`: the wall stretches with a piston between a fixed anchor and the
@@ -576,7 +817,8 @@ pub struct StretchSpec {
 pub struct ProbeSpec {
     /// Column name.
     pub name: String,
-    /// `"pressure"` (fluid, Shepard-normalised) or `"wall_pressure"` (`2 sum p W V`).
+    /// `"pressure"` (fluid, Shepard-normalised), `"wall_pressure"` (`2 sum p W V`) or
+    /// `"height"` (water height of the vertical column through the position).
     pub kind: String,
     /// Position.
     pub position: Vec<f64>,
@@ -596,6 +838,9 @@ pub struct Case {
     /// Shepard factor of the `bi` walls: `"discrete"` or `"geometric"`.
     #[serde(default)]
     pub shepard: ShepardName,
+    /// Options of the semi-analytical walls (`boundary = "usaw"`).
+    #[serde(default)]
+    pub usaw: UsawSection,
     /// Reflect particles about to cross a wall (energy-neutral on fixed walls).
     #[serde(default = "yes")]
     pub elastic_bounce: bool,
@@ -611,6 +856,12 @@ pub struct Case {
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
+    /// Checkpoints.
+    #[serde(default)]
+    pub checkpoint: CheckpointSection,
+    /// Divergence watches.
+    #[serde(default)]
+    pub diagnostics: DiagnosticsSection,
     /// Domain.
     pub domain: Option<DomainSection>,
     /// Flux-driven forcing.
@@ -841,6 +1092,24 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("expected a number above 1, found {}", c.fluid.tait_exponent),
         );
     }
+    if let Some(dom) = &c.domain {
+        if let Some((k, w)) = dom
+            .min
+            .iter()
+            .zip(&dom.max)
+            .map(|(a, b)| b - a)
+            .enumerate()
+            .find(|(_, w)| *w < c.resolution.dx)
+        {
+            return e(
+                "resolution.dx",
+                format!(
+                    "expected dx at most the domain's extent {w} in direction {k}, found {}",
+                    c.resolution.dx
+                ),
+            );
+        }
+    }
     if !(1.0..=4.0).contains(&c.resolution.h_over_dx) {
         return e(
             "resolution.h_over_dx",
@@ -927,6 +1196,56 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             );
         }
     }
+    if !(c.fluid.eta.is_finite() && c.fluid.eta > 0.0) {
+        return e(
+            "fluid.eta",
+            format!("expected a positive number, found {}", c.fluid.eta),
+        );
+    }
+    if !(c.fluid.ferrari_coefficient.is_finite() && c.fluid.ferrari_coefficient >= 0.0) {
+        return e(
+            "fluid.ferrari_coefficient",
+            format!(
+                "expected zero or a positive number, found {}",
+                c.fluid.ferrari_coefficient
+            ),
+        );
+    }
+    if c.usaw.density_power > 1 {
+        return e(
+            "usaw.density_power",
+            format!("expected 0 or 1, found {}", c.usaw.density_power),
+        );
+    }
+    let integrated = c.boundary == BoundaryName::Usaw && c.usaw.gamma == UsawGammaName::Integrated
+        || c.boundary == BoundaryName::Bi && c.shepard == ShepardName::Integrated;
+    if c.boundary == BoundaryName::Usaw
+        && c.usaw.continuity == ContinuityName::Summation
+        && c.time.integrator != IntegratorName::Verlet
+    {
+        return e(
+            "usaw.continuity",
+            "\"summation\" needs time.integrator = \"verlet\"".into(),
+        );
+    }
+    if c.boundary == BoundaryName::Usaw && c.dim != 2 {
+        return e(
+            "boundary",
+            format!("\"usaw\" walls are 2-D only, found dim = {}", c.dim),
+        );
+    }
+    if c.shepard == ShepardName::Integrated && c.dim != 2 {
+        return e(
+            "shepard",
+            format!("\"integrated\" gamma is 2-D only, found dim = {}", c.dim),
+        );
+    }
+    if integrated && !c.body.is_empty() {
+        return e(
+            "body",
+            "the integrated gamma (paper 3, eq 4) is built for fixed walls: use usaw.gamma = \"geometric\" or shepard = \"geometric\" with moving bodies".into(),
+        );
+    }
     if !c.fluid.background_pressure.is_finite() {
         return e(
             "fluid.background_pressure",
@@ -1004,7 +1323,22 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
-        shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+        if let Some(size) = w.element_size {
+            positive(&format!("{key}.element_size"), size)?;
+        }
+        if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
+            crate::mesh_walls::check_wall(loaded, &key, w)?;
+        } else {
+            shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+            if let Some(f) = &w.fluid {
+                if w.shape != "box" || (f != "inside" && f != "outside") {
+                    return e(
+                        &format!("{key}.fluid"),
+                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape),
+                    );
+                }
+            }
+        }
         let sides: &[&str] = if d == 2 {
             &bisph_core::geometry::BOX_SIDES_2D
         } else {
@@ -1037,6 +1371,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
+        }
+        if let Some(fs) = &b.free {
+            if b.motion.is_some() || b.piston.is_some() {
+                return e(
+                    &format!("{key}.free"),
+                    "a body has one of motion, piston or free, not several".into(),
+                );
+            }
+            check_free(loaded, &key, fs, d)?;
         }
         if let Some(p) = &b.piston {
             if b.motion.is_some() {
@@ -1077,14 +1420,6 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
             return e("domain", "expected min < max in every direction".into());
         }
-        if dom
-            .min
-            .iter()
-            .zip(&dom.max)
-            .all(|(a, b)| b - a < c.resolution.dx)
-        {
-            return e("resolution.dx", "dx is larger than the domain".into());
-        }
         let names = &["x", "y", "z"][..d];
         for (k, a) in dom.periodic.iter().enumerate() {
             let Some(axis) = names.iter().position(|n| n == a) else {
@@ -1110,16 +1445,240 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         }
     }
     check_pack(loaded)?;
+    check_reliability(loaded)?;
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
-        if p.kind != "pressure" && p.kind != "wall_pressure" {
+        if p.kind != "pressure" && p.kind != "wall_pressure" && p.kind != "height" {
             return e(
                 &format!("{key}.kind"),
                 format!(
-                    "expected \"pressure\" or \"wall_pressure\", found \"{}\"",
+                    "expected \"pressure\", \"wall_pressure\" or \"height\", found \"{}\"",
                     p.kind
                 ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Checks of the `[checkpoint]` and `[diagnostics]` keys, and placement checks: fluid blocks and
+/// probes inside the domain (or, without a domain, inside the box around the walls).
+fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
+    let e = |key: &str, msg: String| Err(loaded.error(key, msg));
+    let ck = &c.checkpoint;
+    if !(ck.every_minutes >= 0.0 && ck.every_minutes.is_finite()) {
+        return e(
+            "checkpoint.every_minutes",
+            format!(
+                "expected zero (off) or a positive number of minutes, found {}",
+                ck.every_minutes
+            ),
+        );
+    }
+    let g = &c.diagnostics;
+    if !(g.density_ratio_min > 0.0 && g.density_ratio_min <= 1.0) {
+        return e(
+            "diagnostics.density_ratio_min",
+            format!("expected a value in (0, 1], found {}", g.density_ratio_min),
+        );
+    }
+    if !(g.density_ratio_max >= 1.0 && g.density_ratio_max.is_finite()) {
+        return e(
+            "diagnostics.density_ratio_max",
+            format!(
+                "expected a finite value >= 1, found {}",
+                g.density_ratio_max
+            ),
+        );
+    }
+    if !(g.speed_over_c0 > 0.0 && g.speed_over_c0.is_finite()) {
+        return e(
+            "diagnostics.speed_over_c0",
+            format!("expected a positive number, found {}", g.speed_over_c0),
+        );
+    }
+    if !(0.0..1.0).contains(&g.dt_collapse) {
+        return e(
+            "diagnostics.dt_collapse",
+            format!(
+                "expected a value in [0, 1) (0 = off), found {}",
+                g.dt_collapse
+            ),
+        );
+    }
+    if !(g.energy_growth >= 0.0 && g.energy_growth.is_finite()) {
+        return e(
+            "diagnostics.energy_growth",
+            format!(
+                "expected zero (off) or a positive number, found {}",
+                g.energy_growth
+            ),
+        );
+    }
+    if let Some(dt) = c.time.min_dt {
+        if dt >= c.time.end {
+            return e(
+                "time.min_dt",
+                format!(
+                    "expected a value below time.end = {}, found {dt}",
+                    c.time.end
+                ),
+            );
+        }
+    }
+    // The region particles and probes must lie in: the domain, else the walls' bounding box.
+    let (lo, hi, region) = match &c.domain {
+        Some(dom) => (dom.min.clone(), dom.max.clone(), "the domain"),
+        None => {
+            let mut lo = vec![f64::INFINITY; d];
+            let mut hi = vec![f64::NEG_INFINITY; d];
+            let mut grow = |p: &[f64]| {
+                for k in 0..d.min(p.len()) {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            };
+            for w in &c.wall {
+                if w.shape != "box" && w.shape != "polygon" && w.shape != "polyline" {
+                    return Ok(()); // walls from files: no box known before building
+                }
+                for p in w.min.iter().chain(w.max.iter()) {
+                    grow(p);
+                }
+                for p in w.points.iter().flatten() {
+                    grow(p);
+                }
+            }
+            if lo.iter().any(|x| !x.is_finite()) {
+                return Ok(());
+            }
+            (lo, hi, "the box around the walls")
+        }
+    };
+    let outside = |p: &[f64]| {
+        p.iter()
+            .zip(lo.iter().zip(&hi))
+            .any(|(x, (a, b))| !(x >= a && x <= b))
+    };
+    let range = format!("{lo:?} to {hi:?}");
+    for (k, p) in c.probe.iter().enumerate() {
+        if p.position.len() == d && outside(&p.position) {
+            return e(
+                &format!("probe[{k}].position"),
+                format!(
+                    "expected a point inside {region}, {range}, found {:?}",
+                    p.position
+                ),
+            );
+        }
+    }
+    if c.domain.is_some() {
+        for (k, b) in c.fluid_block.iter().enumerate() {
+            let corners: Vec<&Vec<f64>> = match (&b.min, &b.max, &b.points) {
+                (Some(a), Some(z), _) if b.shape == "box" => vec![a, z],
+                (_, _, Some(pts)) if b.shape == "polygon" => pts.iter().collect(),
+                _ => continue,
+            };
+            if let Some(p) = corners.iter().find(|p| p.len() == d && outside(p)) {
+                return e(
+                    &format!("fluid_block[{k}]"),
+                    format!(
+                        "expected the block inside {region}, {range}; its corner {p:?} is outside"
+                    ),
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks a `[body.free]` table.
+fn check_free(loaded: &LoadedCase, key: &str, f: &FreeSpec, d: usize) -> Result<(), CaseError> {
+    let key = format!("{key}.free");
+    let err = |k: &str, m: String| Err(loaded.error(&format!("{key}.{k}"), m));
+    for (name, v) in [("mass", f.mass), ("density", f.density)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return err(name, format!("expected a positive number, found {v}"));
+            }
+        }
+    }
+    if f.mass.is_some() && f.density.is_some() {
+        return err("density", "give mass or density, not both".into());
+    }
+    if f.mass.is_none() && f.density.is_none() {
+        return err(
+            "mass",
+            "missing: a mass (or a density with closed mesh walls)".into(),
+        );
+    }
+    if d == 2 && (f.inertia.is_none() || f.mass.is_none()) {
+        return err(
+            "inertia",
+            "a 2-D body needs its mass and inertia (I_zz)".into(),
+        );
+    }
+    if let Some(i) = &f.inertia {
+        let ok = if d == 2 {
+            i.len() == 1
+        } else {
+            i.len() == 3 || i.len() == 9
+        };
+        if !ok || i.iter().any(|x| !x.is_finite()) {
+            return err(
+                "inertia",
+                format!(
+                    "expected {}, found {} values",
+                    if d == 2 {
+                        "1 value (I_zz)"
+                    } else {
+                        "3 principal moments or 9 values"
+                    },
+                    i.len()
+                ),
+            );
+        }
+        let diagonal: Vec<f64> = if i.len() == 9 {
+            vec![i[0], i[4], i[8]]
+        } else {
+            i.clone()
+        };
+        if diagonal.iter().any(|x| *x <= 0.0) {
+            return err("inertia", "expected positive moments of inertia".into());
+        }
+    }
+    if let Some(v) = &f.velocity {
+        vector(loaded, &format!("{key}.velocity"), v, d)?;
+    }
+    if let Some(w) = &f.angular_velocity {
+        vector(
+            loaded,
+            &format!("{key}.angular_velocity"),
+            w,
+            if d == 2 { 1 } else { 3 },
+        )?;
+    }
+    for (name, list) in [
+        ("lock_translation", &f.lock_translation),
+        ("lock_rotation", &f.lock_rotation),
+    ] {
+        for a in list {
+            if !["x", "y", "z"].contains(&a.as_str()) {
+                return err(
+                    name,
+                    format!("expected axes among \"x\", \"y\", \"z\", found \"{a}\""),
+                );
+            }
+        }
+    }
+    if let Some(c) = &f.coupling {
+        if c != "iterated" && c != "staggered" {
+            return err(
+                "coupling",
+                format!("expected \"iterated\" or \"staggered\", found \"{c}\""),
             );
         }
     }
@@ -1180,7 +1739,7 @@ fn shape_points(
             let allowed = if d == 2 {
                 "\"box\", \"polygon\" or \"polyline\""
             } else {
-                "\"box\""
+                "\"box\", \"mesh\" or \"capsule\""
             };
             Err(loaded.error(
                 &format!("{key}.shape"),

@@ -32,17 +32,35 @@ pub fn at<T>(path: &Path, r: io::Result<T>) -> Result<T, OutputError> {
     })
 }
 
-/// Writes `bytes` to `path` through a temporary file and a rename.
+/// Writes `bytes` to `path` through a temporary file (synced to disk) and a rename, so a crash
+/// leaves the old file or the new one, never a half-written one. On failure the temporary file
+/// is removed and the old file kept.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let tmp = path.with_extension("tmp");
-    at(&tmp, std::fs::write(&tmp, bytes))?;
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".tmp");
+    let tmp = path.with_file_name(name);
+    let written = (|| {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(OutputError {
+            path: path.to_path_buf(),
+            source: e,
+        });
+    }
     at(path, std::fs::rename(&tmp, path))
 }
 
-/// A CSV time series: header first, then one flushed row per call.
+/// A CSV time series: header first, then one flushed row per call (a killed run keeps every
+/// completed row). Its length in bytes is tracked so a resumed run can cut it back to a
+/// checkpoint.
 pub struct Series {
     path: PathBuf,
     out: BufWriter<File>,
+    len: u64,
 }
 
 impl Series {
@@ -52,13 +70,60 @@ impl Series {
         let mut s = Series {
             path,
             out: BufWriter::new(file),
+            len: 0,
         };
         let line = header.join(",");
-        at(
-            &s.path,
-            writeln!(s.out, "{line}").and_then(|_| s.out.flush()),
-        )?;
+        s.line(&line)?;
         Ok(s)
+    }
+
+    /// Reopens an existing series cut back to its first `len` bytes (a checkpoint's length),
+    /// appending after them.
+    pub fn reopen(path: PathBuf, len: u64) -> Result<Self, OutputError> {
+        let file = at(
+            &path,
+            std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .open(&path),
+        )?;
+        let found = at(&path, file.metadata())?.len();
+        if found < len {
+            return Err(OutputError {
+                path,
+                source: io::Error::new(
+                    io::ErrorKind::UnexpectedEof,
+                    format!("the file has {found} bytes, the checkpoint expects {len}"),
+                ),
+            });
+        }
+        at(&path, file.set_len(len))?;
+        let mut file = file;
+        at(&path, io::Seek::seek(&mut file, io::SeekFrom::End(0)))?;
+        Ok(Series {
+            path,
+            out: BufWriter::new(file),
+            len,
+        })
+    }
+
+    /// Bytes written so far (header included).
+    pub fn len(&self) -> u64 {
+        self.len
+    }
+
+    /// `true` before the header is written (never, once created).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    fn line(&mut self, line: &str) -> Result<(), OutputError> {
+        at(
+            &self.path,
+            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
+        )?;
+        self.len += line.len() as u64 + 1;
+        Ok(())
     }
 
     /// Appends one row (full precision) and flushes it.
@@ -70,10 +135,7 @@ impl Series {
             }
             line.push_str(&format!("{v:e}"));
         }
-        at(
-            &self.path,
-            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
-        )
+        self.line(&line)
     }
 
     /// Appends a row whose second column is a name.
@@ -82,10 +144,7 @@ impl Series {
         for v in values {
             line.push_str(&format!(",{v:e}"));
         }
-        at(
-            &self.path,
-            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
-        )
+        self.line(&line)
     }
 }
 
@@ -94,7 +153,7 @@ pub struct Frames {
     dir: PathBuf,
     fluid: PvdCollection,
     walls: PvdCollection,
-    count: usize,
+    times: Vec<f64>,
 }
 
 impl Frames {
@@ -106,18 +165,49 @@ impl Frames {
             dir: dir.to_path_buf(),
             fluid: PvdCollection::new(),
             walls: PvdCollection::new(),
-            count: 0,
+            times: Vec::new(),
         })
+    }
+
+    /// Frames already written at `times` (a resumed run): the `.pvd` indices are rewritten
+    /// to list exactly these, and later frames continue the numbering.
+    pub fn resume(dir: &Path, times: &[f64]) -> Result<Self, OutputError> {
+        let mut frames = Frames::new(dir)?;
+        for (k, &t) in times.iter().enumerate() {
+            frames.fluid.push(t, 0, &format!("vtk/fluid_{k:06}.vtu"));
+            frames.walls.push(t, 0, &format!("vtk/walls_{k:06}.vtu"));
+        }
+        frames.times = times.to_vec();
+        frames.write_indices()?;
+        Ok(frames)
     }
 
     /// Number of frames written.
     pub fn count(&self) -> usize {
-        self.count
+        self.times.len()
+    }
+
+    /// Times of the frames written.
+    pub fn times(&self) -> &[f64] {
+        &self.times
+    }
+
+    /// The fluid file of the last frame, relative to the output directory.
+    pub fn last_fluid_file(&self) -> Option<String> {
+        let k = self.times.len().checked_sub(1)?;
+        Some(format!("vtk/fluid_{k:06}.vtu"))
+    }
+
+    fn write_indices(&self) -> Result<(), OutputError> {
+        let fluid_pvd = self.dir.join("fluid.pvd");
+        at(&fluid_pvd, self.fluid.write(&fluid_pvd))?;
+        let walls_pvd = self.dir.join("walls.pvd");
+        at(&walls_pvd, self.walls.write(&walls_pvd))
     }
 
     /// Writes one frame of the current state.
     pub fn write<V: Vector>(&mut self, sim: &Simulation<V>) -> Result<(), OutputError> {
-        let k = self.count;
+        let k = self.times.len();
         let f = &sim.fluid;
         let points: Vec<[f64; 3]> = f.position.iter().map(|r| r.to_xyz()).collect();
         let velocity: Vec<f64> = f.velocity.iter().flat_map(|u| u.to_xyz()).collect();
@@ -211,11 +301,7 @@ impl Frames {
             ),
         )?;
         self.walls.push(sim.time, 0, &walls_name);
-        let fluid_pvd = self.dir.join("fluid.pvd");
-        at(&fluid_pvd, self.fluid.write(&fluid_pvd))?;
-        let walls_pvd = self.dir.join("walls.pvd");
-        at(&walls_pvd, self.walls.write(&walls_pvd))?;
-        self.count += 1;
-        Ok(())
+        self.times.push(sim.time);
+        self.write_indices()
     }
 }

@@ -17,7 +17,11 @@ use std::path::{Path, PathBuf};
 
 /// The paper-2 validation cases.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
-    vec![Box::new(ShepardGamma2d), Box::new(HydrostaticShepard)]
+    vec![
+        Box::new(ShepardGamma2d),
+        Box::new(ShepardCorner2d),
+        Box::new(HydrostaticShepard),
+    ]
 }
 
 fn plot(
@@ -279,10 +283,140 @@ impl ValidationCase for ShepardGamma2d {
     }
 }
 
+/// `F(q)` of the 2-D geometric Shepard factor (see `geometric_shepard`), polynomial and
+/// divergent parts together, zero beyond the support: the integrand a monolithic rule sees.
+fn shepard_f(kernel: &Wendland, r: f64) -> f64 {
+    let q = r / kernel.h;
+    if q >= 2.0 {
+        return 0.0;
+    }
+    let (q2, q4) = (q * q, q * q * q * q);
+    let polynomial = (q4 * q / 32.0 - 35.0 * q4 / 128.0 + 7.0 * q2 * q / 8.0 - 35.0 * q2 / 32.0
+        + 7.0 / 8.0)
+        / PI;
+    (polynomial - 1.0 / (2.0 * PI * q2)) / (kernel.h * kernel.h)
+}
+
+/// Paper 2, eq 8 by one monolithic quadrature of `F` over each whole segment (no exact
+/// treatment of the divergent part): `gamma = 1 + sum_j a_j sum_k w_k F(|y_k - x|)` with
+/// `a_j = (c_j - x) . n_j`; `points = 1` is the one-point (element centre) rule, otherwise
+/// the 8-point Gauss-Legendre rule.
+fn monolithic_gamma(
+    kernel: &Wendland,
+    x: DVec2,
+    walls: &BoundaryElements<DVec2>,
+    points: usize,
+) -> f64 {
+    let mut gamma = 1.0;
+    for j in 0..walls.len() {
+        let a = (walls.centre[j] - x).dot(walls.normal[j]);
+        let integral = if points == 1 {
+            shepard_f(kernel, (walls.centre[j] - x).length()) * walls.area[j]
+        } else {
+            let k = walls.corner_start[j] as usize;
+            let (p0, p1) = (walls.reference_corners[k], walls.reference_corners[k + 1]);
+            let length = (p1 - p0).length();
+            bisph_core::quadrature::gauss_legendre(0.0, 1.0, 1, |t| {
+                shepard_f(kernel, (p0 + (p1 - p0) * t - x).length())
+            }) * length
+        };
+        gamma += a * integral;
+    }
+    gamma
+}
+
+/// Paper 2, fig 7: relative error of gamma at the particle nearest a 90 degree corner,
+/// `(dx/2, dx/2)`, against h/dx, for the exact geometric gamma and for a monolithic
+/// quadrature of `F` (one point and eight points per element).
+pub struct ShepardCorner2d;
+
+impl ValidationCase for ShepardCorner2d {
+    fn name(&self) -> &'static str {
+        "shepard-corner-2d"
+    }
+    fn description(&self) -> &'static str {
+        "paper 2, fig 7: gamma at the particle nearest a corner vs h/dx, exact geometric vs monolithic quadrature of F"
+    }
+    fn run(&self, _quick: bool, out: &Path) -> Result<CaseReport, String> {
+        let dx = 0.01;
+        let square = [
+            DVec2::ZERO,
+            DVec2::new(1.0, 0.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(0.0, 1.0),
+        ];
+        let walls = elements(box_elements_2d(square[0], square[2], &[], dx));
+        let x = DVec2::splat(0.5 * dx);
+        let ratios = [1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0, 6.0];
+        let (mut exact, mut one, mut eight) = (Vec::new(), Vec::new(), Vec::new());
+        for &hk in &ratios {
+            let kernel = Wendland::new(hk * dx, 2);
+            let mut grid = CellGrid::new(kernel.support);
+            grid.rebuild(&walls.centre);
+            let reference = reference_gamma_polygon(&kernel, x, &square);
+            let relative = |g: f64| ((g - reference) / reference).abs();
+            exact.push(relative(geometric_shepard::gamma(
+                &kernel, x, &walls, &grid,
+            )));
+            one.push(relative(monolithic_gamma(&kernel, x, &walls, 1)));
+            eight.push(relative(monolithic_gamma(&kernel, x, &walls, 8)));
+        }
+        let log = |v: &[f64]| v.iter().map(|e| e.max(1e-17).log10()).collect::<Vec<_>>();
+        let plots = vec![plot(
+            out,
+            "corner_error.png",
+            "gamma at (dx/2, dx/2) from a 90 degree corner: relative error",
+            "h/dx",
+            "log10 relative error",
+            vec![
+                ("geometric (exact)".into(), ratios.to_vec(), log(&exact)),
+                ("monolithic, 1 point".into(), ratios.to_vec(), log(&one)),
+                ("monolithic, 8 points".into(), ratios.to_vec(), log(&eight)),
+            ],
+        )?];
+        let worst = exact.iter().copied().fold(0.0, f64::max);
+        let best_monolithic = one
+            .iter()
+            .chain(&eight)
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let table: Vec<String> = ratios
+            .iter()
+            .zip(exact.iter().zip(one.iter().zip(&eight)))
+            .map(|(hk, (e, (o, g)))| {
+                format!("h/dx {hk}: exact {e:.1e}, 1-point {o:.1e}, 8-point {g:.1e}")
+            })
+            .collect();
+        Ok(CaseReport {
+            name: self.name().into(),
+            checks: vec![
+                Check::new(
+                    "max relative error of geometric gamma, h/dx 1.5-6",
+                    worst,
+                    1e-9,
+                    Tolerance::AtMost,
+                    "independent area integral of W",
+                ),
+                Check::new(
+                    "smallest relative error of the monolithic rules",
+                    best_monolithic,
+                    1e3 * worst.max(1e-15),
+                    Tolerance::AtLeast,
+                    "paper 2 fig 7: the monolithic quadrature is orders of magnitude worse at the corner",
+                ),
+            ],
+            plots,
+            notes: vec![format!("relative error at (dx/2, dx/2): {}", table.join("; "))],
+            wall_seconds: 0.0,
+        })
+    }
+}
+
 /// Paper 2, 3.1: still water, H = 92 mm in the 0.9 m wide SPHERIC test 9 tank, `bi` walls.
 pub struct HydrostaticShepard;
 
-const TANK: &str = r#"
+/// The paper-2 still-water tank (also the `bisph bench --suite shepard` case).
+pub const TANK: &str = r#"
 name = "hydrostatic-shepard"
 dim = 2
 boundary = "bi"

@@ -29,9 +29,19 @@ impl<V> BlockRegion<V> {
 
 /// The transform of a shape (units, scale, rotation, translation).
 pub fn transform_of(s: &ShapeSpec) -> Transform {
-    let units = s.units.as_deref().and_then(unit_factor).unwrap_or(1.0);
+    transform_from(&s.units, s.scale, &s.rotate, &s.translate)
+}
+
+/// The transform from a case's `units`, `scale`, `rotate` (degrees) and `translate`.
+pub fn transform_from(
+    units: &Option<String>,
+    scale: Option<f64>,
+    rotate: &Option<Angles>,
+    translate: &Option<Vec<f64>>,
+) -> Transform {
+    let units = units.as_deref().and_then(unit_factor).unwrap_or(1.0);
     let mut angles = [0.0; 3];
-    match &s.rotate {
+    match rotate {
         Some(Angles::One(a)) => angles[0] = a.to_radians(),
         Some(Angles::Many(v)) => {
             for (k, a) in v.iter().take(3).enumerate() {
@@ -40,14 +50,14 @@ pub fn transform_of(s: &ShapeSpec) -> Transform {
         }
         None => {}
     }
-    let mut translate = [0.0; 3];
-    for (k, t) in s.translate.iter().flatten().take(3).enumerate() {
-        translate[k] = *t;
+    let mut shift = [0.0; 3];
+    for (k, t) in translate.iter().flatten().take(3).enumerate() {
+        shift[k] = *t;
     }
     Transform {
-        scale: units * s.scale.unwrap_or(1.0),
+        scale: units * scale.unwrap_or(1.0),
         angles,
-        translate,
+        translate: shift,
     }
 }
 

@@ -2,13 +2,16 @@
 
 use crate::build::{build_simulation, CaseDim};
 use crate::case::{CaseError, LoadedCase};
+use crate::checkpoint::{self, Checkpoint, CheckpointError, RunCounters, SimState};
+use crate::diagnostics::{energy_growth, from_sim_error, Diagnosis, Watch};
 use crate::output::{at, write_atomic, Frames, OutputError, Series};
 use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
 use bisph_core::energy::energy_scale;
 use bisph_core::walls::Motion;
-use bisph_core::{SimError, Simulation};
+use bisph_core::Simulation;
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 /// Why a run failed.
@@ -16,10 +19,38 @@ use std::time::Instant;
 pub enum RunError {
     /// The case is wrong.
     Case(CaseError),
-    /// An output could not be written.
+    /// An output could not be written (the last checkpoint on disk is kept).
     Output(OutputError),
-    /// The simulation stopped early (outputs up to then are kept; `summary.json` says why).
-    Stopped(SimError),
+    /// A checkpoint was refused.
+    Checkpoint(CheckpointError),
+    /// The case needs more memory than the machine has.
+    Resources(String),
+    /// The run was interrupted by a signal; a checkpoint was written.
+    Interrupted {
+        /// Step reached.
+        step: u64,
+        /// Time reached.
+        time: f64,
+        /// The checkpoint to resume from.
+        checkpoint: PathBuf,
+    },
+    /// A divergence watch tripped (outputs up to the last good state are kept;
+    /// `diagnostics.json` says what happened).
+    Stopped(Box<Diagnosis>),
+}
+
+impl RunError {
+    /// Exit code of `bisph run` for this error (see the table in `docs/errors.md`).
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunError::Case(_) => 1,
+            RunError::Output(_) => 4,
+            RunError::Checkpoint(_) => 5,
+            RunError::Resources(_) => 6,
+            RunError::Interrupted { .. } => 10,
+            RunError::Stopped(d) => d.exit_code,
+        }
+    }
 }
 
 impl std::fmt::Display for RunError {
@@ -27,7 +58,18 @@ impl std::fmt::Display for RunError {
         match self {
             RunError::Case(e) => write!(f, "{e}"),
             RunError::Output(e) => write!(f, "{e}"),
-            RunError::Stopped(e) => write!(f, "simulation stopped: {e}"),
+            RunError::Checkpoint(e) => write!(f, "{e}"),
+            RunError::Resources(e) => write!(f, "{e}"),
+            RunError::Interrupted {
+                step,
+                time,
+                checkpoint,
+            } => write!(
+                f,
+                "interrupted at step {step} (t = {time:.6e} s); checkpoint written to {}",
+                checkpoint.display()
+            ),
+            RunError::Stopped(d) => write!(f, "simulation stopped: {d}"),
         }
     }
 }
@@ -37,6 +79,42 @@ impl std::error::Error for RunError {}
 impl From<OutputError> for RunError {
     fn from(e: OutputError) -> Self {
         RunError::Output(e)
+    }
+}
+
+/// Wall-clock seconds of the time loop by phase.
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseSeconds {
+    /// Cell grid rebuilds, reordering excluded.
+    pub neighbour_search: f64,
+    /// Reordering the particles by cell.
+    pub reorder: f64,
+    /// Fluid and wall terms of the rate sweeps, equation of state included.
+    pub forces: f64,
+    /// Wall pressures (extrapolation to the elements).
+    pub wall_pressure: f64,
+    /// The rest of the steps: updates, bounce, checks.
+    pub integration: f64,
+    /// Everything outside the steps: energies, probes, CSV and VTK output.
+    pub output: f64,
+}
+
+impl PhaseSeconds {
+    fn new(t: &bisph_core::simulation::PhaseTimes, wall_seconds: f64) -> Self {
+        PhaseSeconds {
+            neighbour_search: t.neighbours - t.reorder,
+            reorder: t.reorder,
+            forces: t.rates - t.wall_pressure,
+            wall_pressure: t.wall_pressure,
+            integration: t.steps - t.neighbours - t.rates,
+            output: wall_seconds - t.steps,
+        }
+    }
+}
+
+impl From<CheckpointError> for RunError {
+    fn from(e: CheckpointError) -> Self {
+        RunError::Checkpoint(e)
     }
 }
 
@@ -55,10 +133,12 @@ pub struct Summary {
     pub steps: u64,
     /// Simulated time reached [s].
     pub time: f64,
-    /// Wall-clock seconds of the time loop (outputs included).
+    /// Wall-clock seconds of the time loop (outputs included; all sessions of a resumed run).
     pub wall_seconds: f64,
     /// Fluid particles times steps over wall seconds.
     pub particle_steps_per_second: f64,
+    /// Where the wall seconds went.
+    pub phase_seconds: PhaseSeconds,
     /// `(E_total(end) - E_total(0)) / E_scale`, where `E_scale` is the initial kinetic and
     /// compressible energy plus the potential energy above the lowest particle.
     pub energy_drift_relative: f64,
@@ -86,6 +166,21 @@ pub struct Summary {
     pub threads: usize,
     /// VTK frames written.
     pub frames: usize,
+    /// Checkpoints written by this session.
+    pub checkpoints: u64,
+    /// Step this session resumed from (absent for a fresh run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resumed_from_step: Option<u64>,
+    /// Free bodies: largest `|E_fluid + E_bodies - (same at 0)| / E_scale` over the run, with
+    /// `E_bodies` their kinetic (translation + rotation) and gravity energy; absent without
+    /// free bodies.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_max_relative: Option<f64>,
+    /// Free bodies: the same at the end of the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fluid_body_energy_drift_relative: Option<f64>,
+    /// Fluid particles behind a wall (inside a body or through a wall) at the end.
+    pub particles_behind_walls: usize,
     /// Why the run stopped early (absent when it reached its end).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
@@ -102,60 +197,107 @@ pub struct Progress {
     pub step: u64,
 }
 
+/// How `bisph run` runs, beyond the case.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct RunOptions<'a> {
+    /// Checkpoint every this many steps (overrides `checkpoint.every_steps`).
+    pub checkpoint_steps: Option<u64>,
+    /// Checkpoint every this many wall-clock minutes (overrides `checkpoint.every_minutes`).
+    pub checkpoint_minutes: Option<f64>,
+    /// Set (by a signal handler) to stop at the next step with a checkpoint.
+    pub stop: Option<&'a AtomicBool>,
+    /// Continue from `out/checkpoint.bin`.
+    pub resume: bool,
+}
+
 /// Runs the case in its dimension; see [`run`].
 pub fn run_case(
     loaded: &LoadedCase,
     out: &Path,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
+    run_case_with(loaded, out, &RunOptions::default(), progress)
+}
+
+/// Runs the case in its dimension with options; see [`run`].
+pub fn run_case_with(
+    loaded: &LoadedCase,
+    out: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
     if loaded.case.dim == 2 {
-        run::<glam::DVec2>(loaded, out, progress)
+        run::<glam::DVec2>(loaded, out, options, progress)
     } else {
-        run::<glam::DVec3>(loaded, out, progress)
+        run::<glam::DVec3>(loaded, out, options, progress)
     }
 }
 
+/// The case stored in the checkpoint of output directory `dir`, for `bisph run --resume`.
+pub fn resume_case(dir: &Path) -> Result<LoadedCase, RunError> {
+    let path = dir.join(checkpoint::FILE_NAME);
+    let bytes = std::fs::read(&path).map_err(|source| CheckpointError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    let (source, text) = match checkpoint::peek_dim(&bytes) {
+        Some(3) => {
+            let c = checkpoint::decode::<glam::DVec3>(&path, &bytes)?;
+            (c.case_source, c.case_text)
+        }
+        _ => {
+            let c = checkpoint::decode::<glam::DVec2>(&path, &bytes)?;
+            (c.case_source, c.case_text)
+        }
+    };
+    crate::case::parse_case(&source, &text, &[]).map_err(RunError::Case)
+}
+
+/// The open CSV series of a run, in the order of [`checkpoint::SERIES_FILES`].
+struct Outputs {
+    series: [Option<Series>; checkpoint::SERIES],
+}
+
+impl Outputs {
+    fn lengths(&self) -> [u64; checkpoint::SERIES] {
+        let mut l = [0; checkpoint::SERIES];
+        for (k, s) in self.series.iter().enumerate() {
+            l[k] = s.as_ref().map_or(0, |s| s.len());
+        }
+        l
+    }
+    fn get(&mut self, k: usize) -> Option<&mut Series> {
+        self.series[k].as_mut()
+    }
+}
+
+const ENERGY: usize = 0;
+const FORCES: usize = 1;
+const PROBES: usize = 2;
+const BODIES: usize = 3;
+const MIDPOINT: usize = 4;
+const FLUX: usize = 5;
+
 /// Builds and runs a case, writing `energy.csv`, `forces.csv`, `probes.csv`, VTK frames,
-/// `summary.json`, plots and a copy of the case into `out`.
+/// `summary.json`, plots and a copy of the case into `out`; checkpoints into
+/// `out/checkpoint.bin`; on a tripped watch, `diagnostics.json`.
 pub fn run<V: CaseDim>(
     loaded: &LoadedCase,
     out: &Path,
+    options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
+    crate::resources::check_memory(loaded).map_err(RunError::Resources)?;
     let mut sim: Simulation<V> = build_simulation(loaded).map_err(RunError::Case)?;
     at(out, std::fs::create_dir_all(out))?;
-    write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
     let case = &loaded.case;
     let end = case.time.end;
-
-    let mut energy_csv = Series::create(
-        out.join("energy.csv"),
-        &[
-            "t",
-            "kinetic",
-            "compressible",
-            "potential",
-            "wall_work",
-            "total",
-            "viscous_dissipation",
-            "forcing_work",
-        ]
-        .map(String::from),
-    )?;
-    let mut flux_csv = match sim.config.flux {
-        Some(_) => Some(Series::create(
-            out.join("flux.csv"),
-            &[
-                "t",
-                "bulk_velocity",
-                "target_velocity",
-                "force",
-                "relative_error",
-            ]
-            .map(String::from),
-        )?),
-        None => None,
+    let checkpoint_path = out.join(checkpoint::FILE_NAME);
+    let resumed = match options.resume {
+        true => Some(checkpoint::read::<V>(&checkpoint_path)?),
+        false => None,
     };
+
     let mut force_header = vec![
         "t".to_string(),
         "body".to_string(),
@@ -165,20 +307,36 @@ pub fn run<V: CaseDim>(
     if V::DIM == 3 {
         force_header.extend(["fz", "mx", "my", "mz"].map(String::from));
     }
-    let mut forces_csv = Series::create(out.join("forces.csv"), &force_header)?;
     let mut probe_header = vec!["t".to_string()];
     probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
-    let mut probes_csv = Series::create(out.join("probes.csv"), &probe_header)?;
-    let mut frames = Frames::new(out)?;
     let has_pistons = sim
         .walls
         .bodies
         .iter()
         .any(|b| matches!(b.motion, Motion::Piston(_)));
-    let mut bodies_csv = match has_pistons {
-        true => Some(Series::create(
-            out.join("bodies.csv"),
-            &[
+    let midpoint = match sim.config.integrator {
+        bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
+        bisph_core::simulation::Integrator::Verlet => None,
+    };
+    let headers: [Option<Vec<String>>; checkpoint::SERIES] = [
+        Some(
+            [
+                "t",
+                "kinetic",
+                "compressible",
+                "potential",
+                "wall_work",
+                "total",
+                "viscous_dissipation",
+                "forcing_work",
+            ]
+            .map(String::from)
+            .to_vec(),
+        ),
+        Some(force_header),
+        Some(probe_header.clone()),
+        has_pistons.then(|| {
+            [
                 "t",
                 "body",
                 "position",
@@ -186,41 +344,170 @@ pub fn run<V: CaseDim>(
                 "kinetic",
                 "outside_work",
             ]
-            .map(String::from),
-        )?),
-        false => None,
+            .map(String::from)
+            .to_vec()
+        }),
+        midpoint.map(|_| ["t", "iterations", "residue"].map(String::from).to_vec()),
+        sim.config.flux.map(|_| {
+            [
+                "t",
+                "bulk_velocity",
+                "target_velocity",
+                "force",
+                "relative_error",
+            ]
+            .map(String::from)
+            .to_vec()
+        }),
+    ];
+    // Free bodies: one CSV each, and the fluid + bodies energy watched for the summary.
+    let mut free_csv = Vec::new();
+    let has_free = sim
+        .walls
+        .bodies
+        .iter()
+        .any(|b| matches!(b.motion, Motion::Free(_)));
+    if has_free && resumed.is_some() {
+        return Err(RunError::Checkpoint(CheckpointError::Mismatch {
+            path: checkpoint_path.clone(),
+            reason: "resuming a run with free bodies is not supported yet".into(),
+        }));
+    }
+    for b in &sim.walls.bodies {
+        if matches!(b.motion, Motion::Free(_)) {
+            free_csv.push(Series::create(
+                out.join(format!("body_{}.csv", b.name)),
+                &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
+            )?);
+        }
+    }
+    let body_energy = |sim: &Simulation<V>| {
+        let e = sim.energy();
+        let (k, p) = sim.walls.body_energy();
+        e.kinetic + e.compressible + e.potential + k + p
     };
-    let midpoint = match sim.config.integrator {
-        bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
-        bisph_core::simulation::Integrator::Verlet => None,
-    };
-    let mut iterations_csv = match midpoint {
-        Some(_) => Some(Series::create(
-            out.join("midpoint.csv"),
-            &["t", "iterations", "residue"].map(String::from),
-        )?),
-        None => None,
-    };
-    let (mut iterations_sum, mut iterations_max, mut residue_max, mut unconverged) =
-        (0u64, 0u32, 0.0f64, 0u64);
+    let fluid_body0 = body_energy(&sim);
+    let mut fluid_body_max: f64 = 0.0;
 
-    let scale = energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity);
-    let e0 = sim.energy();
-    let mut history: Vec<[f64; 8]> = Vec::new();
-    let mut probe_history: Vec<Vec<f64>> = Vec::new();
-    let mut max_drift: f64 = 0.0;
-    let mut max_speed: f64 = 0.0;
+    let mut counters;
+    let mut history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>;
+    let mut probe_history: Vec<Vec<f64>>;
+    let mut outputs = Outputs {
+        series: Default::default(),
+    };
+    let mut frames;
+    let resumed_from_step;
+    match resumed {
+        Some(c) => {
+            c.sim
+                .restore(&mut sim)
+                .and_then(|_| {
+                    c.run.check(
+                        sim.time,
+                        case.output.series_interval,
+                        case.output.vtk_interval,
+                    )
+                })
+                .map_err(|reason| CheckpointError::Mismatch {
+                    path: checkpoint_path.clone(),
+                    reason,
+                })?;
+            for (k, header) in headers.iter().enumerate() {
+                if header.is_some() {
+                    let path = out.join(checkpoint::SERIES_FILES[k]);
+                    outputs.series[k] = Some(Series::reopen(path, c.run.csv_lengths[k])?);
+                }
+            }
+            frames = Frames::resume(out, &c.run.frame_times)?;
+            counters = c.run;
+            history = c.history;
+            probe_history = c.probe_history;
+            resumed_from_step = Some(sim.step);
+        }
+        None => {
+            write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
+            for (k, header) in headers.iter().enumerate() {
+                if let Some(h) = header {
+                    let path = out.join(checkpoint::SERIES_FILES[k]);
+                    outputs.series[k] = Some(Series::create(path, h)?);
+                }
+            }
+            // A stale checkpoint or report from an earlier run in this folder must not be
+            // mistaken for this run's.
+            for stale in [checkpoint::FILE_NAME, "diagnostics.json"] {
+                let p = out.join(stale);
+                if p.exists() {
+                    at(&p, std::fs::remove_file(&p))?;
+                }
+            }
+            frames = Frames::new(out)?;
+            counters = RunCounters {
+                scale: energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity),
+                e0_total: sim.energy().total,
+                ..RunCounters::default()
+            };
+            history = Vec::new();
+            probe_history = Vec::new();
+            resumed_from_step = None;
+        }
+    }
+    let case_source = std::fs::canonicalize(&loaded.source)
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|_| loaded.source.clone());
+    let every_steps = options
+        .checkpoint_steps
+        .unwrap_or(case.checkpoint.every_steps);
+    let every_seconds = 60.0
+        * options
+            .checkpoint_minutes
+            .unwrap_or(case.checkpoint.every_minutes);
+    let mut watch = Watch::new(case.diagnostics.clone());
+
+    sim.timings = Default::default();
     let started = Instant::now();
-    let mut next_series = 0.0;
-    let mut next_frame = 0.0;
-    let mut stopped = None;
+    let wall_before = counters.wall_seconds;
+    let mut last_checkpoint = Instant::now();
+    let mut checkpoints = 0u64;
+    let mut skip_outputs = resumed_from_step.is_some();
+    let mut good = SimState::<V>::default();
+    let mut good_counters = counters.clone();
+    let mut good_rows = (history.len(), probe_history.len());
+    let mut interrupted = false;
+    let mut trip: Option<Diagnosis> = None;
+    let write_checkpoint = |good: &SimState<V>,
+                            counters: &RunCounters,
+                            history: &[[f64; checkpoint::ENERGY_COLUMNS]],
+                            probe_history: &[Vec<f64>]|
+     -> Result<(), OutputError> {
+        let c = Checkpoint {
+            case_source: case_source.clone(),
+            case_text: loaded.text.clone(),
+            sim: good.clone(),
+            run: counters.clone(),
+            history: history.to_vec(),
+            probe_history: probe_history.to_vec(),
+        };
+        checkpoint::write(&checkpoint_path, &c)
+    };
     loop {
         let t = sim.time;
         let last = t >= end * (1.0 - 1e-12);
-        if t >= next_series || last {
+        if !skip_outputs && (t >= counters.next_series || last) {
             let e = sim.energy();
-            max_drift = max_drift.max((e.total - e0.total).abs() / scale);
-            max_speed = max_speed.max(sim.max_speed());
+            if let Some(d) = energy_growth(
+                &watch.settings,
+                &sim,
+                e.total,
+                counters.e0_total,
+                counters.scale,
+            ) {
+                trip = Some(d);
+                break;
+            }
+            counters.max_drift = counters
+                .max_drift
+                .max((e.total - counters.e0_total).abs() / counters.scale);
+            counters.max_speed = counters.max_speed.max(sim.max_speed());
             let row = [
                 t,
                 e.kinetic,
@@ -231,17 +518,21 @@ pub fn run<V: CaseDim>(
                 e.viscous_dissipation,
                 e.forcing_work,
             ];
-            energy_csv.row(&row)?;
-            if let (Some(csv), Some(flux)) = (flux_csv.as_mut(), sim.config.flux) {
+            if let Some(csv) = outputs.get(ENERGY) {
+                csv.row(&row)?;
+            }
+            if let Some(flux) = sim.config.flux {
                 let bulk = sim.bulk_velocity();
                 let target = flux.target_velocity;
-                csv.row(&[
-                    t,
-                    bulk,
-                    target,
-                    sim.flux_history.force,
-                    (bulk - target) / target,
-                ])?;
+                if let Some(csv) = outputs.get(FLUX) {
+                    csv.row(&[
+                        t,
+                        bulk,
+                        target,
+                        sim.flux_history.force,
+                        (bulk - target) / target,
+                    ])?;
+                }
                 // The driving force on the whole fluid, `F sum_i m_i`.
                 let total_mass: f64 = sim.fluid.mass.iter().sum();
                 let force = sim.body_force * total_mass;
@@ -249,7 +540,9 @@ pub fn run<V: CaseDim>(
                 if V::DIM == 3 {
                     values.extend([0.0; 3]);
                 }
-                forces_csv.named_row(t, "driving", &values)?;
+                if let Some(csv) = outputs.get(FORCES) {
+                    csv.named_row(t, "driving", &values)?;
+                }
             }
             history.push(row);
             for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
@@ -257,9 +550,27 @@ pub fn run<V: CaseDim>(
                 if V::DIM == 3 {
                     values.extend(V::angular_to_vec(moment));
                 }
-                forces_csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
+                if let Some(csv) = outputs.get(FORCES) {
+                    csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
+                }
             }
-            if let Some(csv) = bodies_csv.as_mut() {
+            if has_free {
+                let loads = sim.walls.body_loads(t);
+                let mut k = 0;
+                for (b, body) in sim.walls.bodies.iter().enumerate() {
+                    if let Motion::Free(f) = &body.motion {
+                        let centre = body.centre + body.motion.kinematics(t).displacement;
+                        let row = crate::bodies_out::free_body_row::<V>(
+                            t, f, centre, loads[b].0, loads[b].1,
+                        );
+                        free_csv[k].row(&row)?;
+                        k += 1;
+                    }
+                }
+                fluid_body_max =
+                    fluid_body_max.max((body_energy(&sim) - fluid_body0).abs() / counters.scale);
+            }
+            if let Some(csv) = outputs.get(BODIES) {
                 for b in &sim.walls.bodies {
                     if let Motion::Piston(p) = b.motion {
                         let values = [
@@ -274,23 +585,26 @@ pub fn run<V: CaseDim>(
             }
             let mut row = vec![t];
             row.extend(sim.sample_probes());
-            probes_csv.row(&row)?;
+            if let Some(csv) = outputs.get(PROBES) {
+                csv.row(&row)?;
+            }
             probe_history.push(row);
-            next_series = if case.output.series_interval > 0.0 {
-                next_series + case.output.series_interval
+            counters.next_series = if case.output.series_interval > 0.0 {
+                counters.next_series + case.output.series_interval
             } else {
                 t
             };
-            while case.output.series_interval > 0.0 && next_series <= t {
-                next_series += case.output.series_interval;
+            while case.output.series_interval > 0.0 && counters.next_series <= t {
+                counters.next_series += case.output.series_interval;
             }
         }
-        if case.output.vtk_interval > 0.0 && (t >= next_frame || last) {
+        if !skip_outputs && case.output.vtk_interval > 0.0 && (t >= counters.next_frame || last) {
             frames.write(&sim)?;
-            while next_frame <= t {
-                next_frame += case.output.vtk_interval;
+            while counters.next_frame <= t {
+                counters.next_frame += case.output.vtk_interval;
             }
         }
+        skip_outputs = false;
         progress(Progress {
             time: t,
             end,
@@ -299,25 +613,71 @@ pub fn run<V: CaseDim>(
         if last {
             break;
         }
-        if let Err(e) = sim.advance(Some(end)) {
-            stopped = Some(e);
+        // The loop point: the state a checkpoint holds, and the last good state for the watches.
+        if counters.dt0 == 0.0 {
+            counters.dt0 = sim.next_dt();
+        }
+        counters.csv_lengths = outputs.lengths();
+        counters.frame_times.clear();
+        counters.frame_times.extend_from_slice(frames.times());
+        counters.wall_seconds = wall_before + started.elapsed().as_secs_f64();
+        good.capture(&sim);
+        good_counters.clone_from(&counters);
+        good_rows = (history.len(), probe_history.len());
+        let signalled = options
+            .stop
+            .is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+        let due = (every_steps > 0 && sim.step > 0 && sim.step.is_multiple_of(every_steps))
+            || (every_seconds > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= every_seconds)
+            || (signalled && case.checkpoint.on_signal);
+        if due && Some(sim.step) != resumed_from_step {
+            write_checkpoint(&good, &counters, &history, &probe_history)?;
+            checkpoints += 1;
+            last_checkpoint = Instant::now();
+        }
+        if signalled {
+            interrupted = true;
             break;
         }
-        iterations_sum += sim.last_iterations as u64;
-        iterations_max = iterations_max.max(sim.last_iterations);
-        residue_max = residue_max.max(sim.last_residue);
-        if let (Some(csv), Some(p)) = (iterations_csv.as_mut(), midpoint) {
+        if let Err(e) = sim.advance(Some(end)) {
+            trip = Some(from_sim_error(&e, &sim));
+            break;
+        }
+        if let Some(d) = watch.check(&sim, &good, counters.dt0) {
+            trip = Some(d);
+            break;
+        }
+        counters.iterations_sum += sim.last_iterations as u64;
+        counters.iterations_max = counters.iterations_max.max(sim.last_iterations);
+        counters.residue_max = counters.residue_max.max(sim.last_residue);
+        if let (Some(csv), Some(p)) = (outputs.get(MIDPOINT), midpoint) {
             csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
             if sim.last_residue >= p.tolerance {
-                unconverged += 1;
+                counters.unconverged += 1;
             }
         }
     }
-    let wall_seconds = started.elapsed().as_secs_f64();
-    if stopped.is_some() && case.output.vtk_interval > 0.0 {
-        // Keep what was written and add the last state for inspection.
+    if let Some(d) = trip.as_mut() {
+        // Back to the last good state: checkpoint it, write it as a VTK frame, report.
+        good.restore(&mut sim)
+            .map_err(|reason| CheckpointError::Mismatch {
+                path: checkpoint_path.clone(),
+                reason,
+            })?;
+        history.truncate(good_rows.0);
+        probe_history.truncate(good_rows.1);
+        counters.clone_from(&good_counters);
+        write_checkpoint(&good, &counters, &history, &probe_history)?;
+        checkpoints += 1;
         frames.write(&sim)?;
+        d.last_good_step = good.step;
+        d.last_good_time = good.time;
+        d.checkpoint = Some(checkpoint::FILE_NAME.to_string());
+        d.vtk_frame = frames.last_fluid_file();
+        let json = serde_json::to_string_pretty(&*d).unwrap_or_default();
+        write_atomic(&out.join("diagnostics.json"), json.as_bytes())?;
     }
+    let wall_seconds = wall_before + started.elapsed().as_secs_f64();
     let e_final = sim.energy();
     let summary = Summary {
         case: case.name.clone(),
@@ -329,30 +689,54 @@ pub fn run<V: CaseDim>(
         wall_seconds,
         particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
             / wall_seconds.max(1e-9),
-        energy_drift_relative: (e_final.total - e0.total) / scale,
-        energy_scale: scale,
-        energy_total_initial: e0.total,
+        phase_seconds: PhaseSeconds::new(&sim.timings, started.elapsed().as_secs_f64()),
+        energy_drift_relative: (e_final.total - counters.e0_total) / counters.scale,
+        energy_scale: counters.scale,
+        energy_total_initial: counters.e0_total,
         energy_total_final: e_final.total,
-        energy_drift_max_relative: max_drift,
+        energy_drift_max_relative: counters.max_drift,
         max_speed_final: sim.max_speed(),
-        max_speed_max: max_speed,
-        iterations_mean: iterations_sum as f64 / sim.step.max(1) as f64,
-        iterations_max,
-        residue_max,
-        unconverged_steps: unconverged,
+        max_speed_max: counters.max_speed,
+        iterations_mean: counters.iterations_sum as f64 / sim.step.max(1) as f64,
+        iterations_max: counters.iterations_max,
+        residue_max: counters.residue_max,
+        unconverged_steps: counters.unconverged,
         threads: rayon::current_num_threads(),
         frames: frames.count(),
-        stopped: stopped.as_ref().map(|e| e.to_string()),
+        checkpoints,
+        resumed_from_step,
+        fluid_body_energy_drift_max_relative: has_free.then_some(fluid_body_max),
+        fluid_body_energy_drift_relative: has_free
+            .then(|| (body_energy(&sim) - fluid_body0) / counters.scale),
+        particles_behind_walls: sim
+            .walls
+            .count_behind(&sim.fluid.position, sim.config.kernel.support),
+        stopped: match (&trip, interrupted) {
+            (Some(d), _) => Some(d.to_string()),
+            (None, true) => Some("interrupted by a signal; resume with --resume".into()),
+            _ => None,
+        },
     };
     let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
     write_atomic(&out.join("summary.json"), json.as_bytes())?;
+    if let Some(d) = trip {
+        return Err(RunError::Stopped(Box::new(d)));
+    }
+    if interrupted {
+        return Err(RunError::Interrupted {
+            step: sim.step,
+            time: sim.time,
+            checkpoint: checkpoint_path,
+        });
+    }
     if case.output.plots {
         write_plots(out, &history, &probe_header, &probe_history)?;
     }
-    match stopped {
-        Some(e) => Err(RunError::Stopped(e)),
-        None => Ok(summary),
+    // The run is complete: its checkpoint is stale.
+    if checkpoint_path.exists() {
+        at(&checkpoint_path, std::fs::remove_file(&checkpoint_path))?;
     }
+    Ok(summary)
 }
 
 fn write_plots(

@@ -17,6 +17,11 @@ fn fields(line: &str) -> impl Iterator<Item = &str> {
 fn read_rows(path: &Path, min_cols: usize) -> Result<Vec<Vec<Vec<f64>>>, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    parse_rows(&text, path, min_cols)
+}
+
+/// [`read_rows`] on text already read; `path` names the source in messages.
+pub fn parse_rows(text: &str, path: &Path, min_cols: usize) -> Result<Vec<Vec<Vec<f64>>>, String> {
     let mut groups: Vec<Vec<Vec<f64>>> = vec![Vec::new()];
     let mut seen_data = false;
     for (n, raw) in text.lines().enumerate() {
@@ -73,28 +78,55 @@ pub fn read_particles(path: &Path, dim: usize) -> Result<Vec<Vec<f64>>, String> 
 
 /// Reads an STL file, binary or ASCII, as a triangle soup.
 pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
+    Ok(read_stl_facets(path)?.into_iter().map(|(t, _)| t).collect())
+}
+
+/// Reads an STL file, binary or ASCII: each facet's corners and its stored normal (zero
+/// when the file leaves it blank).
+pub fn read_stl_facets(path: &Path) -> Result<Vec<([DVec3; 3], DVec3)>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let triangles = parse_stl(&bytes, path)?;
+    if let Some(k) = triangles
+        .iter()
+        .position(|(t, n)| !n.is_finite() || t.iter().any(|v| !v.is_finite()))
+    {
+        return Err(format!(
+            "{}: triangle {} has a non-finite coordinate",
+            path.display(),
+            k + 1
+        ));
+    }
+    Ok(triangles)
+}
+
+/// Parses STL bytes (binary or ASCII) into facets (corners, stored normal); `path` names the
+/// source in messages. The triangle count
+/// of a binary file is trusted only when the file's size matches it.
+pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<([DVec3; 3], DVec3)>, String> {
     let binary_size = |n: usize| 84 + 50 * n;
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
         if bytes.len() == binary_size(n) {
             let mut out = Vec::with_capacity(n);
             for t in 0..n {
-                let base = 84 + 50 * t + 12; // skip the stored normal
+                let base = 84 + 50 * t;
                 let f = |k: usize| {
                     let o = base + 4 * k;
                     f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64
                 };
-                out.push([
+                out.push((
+                    [
+                        DVec3::new(f(3), f(4), f(5)),
+                        DVec3::new(f(6), f(7), f(8)),
+                        DVec3::new(f(9), f(10), f(11)),
+                    ],
                     DVec3::new(f(0), f(1), f(2)),
-                    DVec3::new(f(3), f(4), f(5)),
-                    DVec3::new(f(6), f(7), f(8)),
-                ]);
+                ));
             }
             return Ok(out);
         }
     }
-    let text = std::str::from_utf8(&bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
         format!(
             "{}: neither a binary STL (the size does not match the triangle count) nor ASCII text",
             path.display()
@@ -108,9 +140,18 @@ pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
     }
     let mut out = Vec::new();
     let mut current: Vec<DVec3> = Vec::new();
+    let mut normal = DVec3::ZERO;
     for (n, raw) in text.lines().enumerate() {
         let mut words = raw.split_whitespace();
         match words.next() {
+            Some("facet") => {
+                let v: Vec<f64> = words.skip(1).filter_map(|w| w.parse().ok()).collect();
+                normal = if v.len() == 3 {
+                    DVec3::new(v[0], v[1], v[2])
+                } else {
+                    DVec3::ZERO
+                };
+            }
             Some("vertex") => {
                 let v: Result<Vec<f64>, _> = words.map(str::parse::<f64>).collect();
                 match v {
@@ -134,7 +175,7 @@ pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
                         current.len()
                     ));
                 }
-                out.push([current[0], current[1], current[2]]);
+                out.push(([current[0], current[1], current[2]], normal));
                 current.clear();
             }
             _ => {}
@@ -144,6 +185,63 @@ pub fn read_stl(path: &Path) -> Result<Vec<[DVec3; 3]>, String> {
         return Err(format!("{}: no facet found", path.display()));
     }
     Ok(out)
+}
+
+/// Reads a Wavefront OBJ file's faces (`v x y z` vertices, `f a b c [d]` faces with 1-based
+/// or negative indices, `a/t/n` forms accepted; other records ignored) as corner polygons.
+pub fn read_obj(path: &Path) -> Result<Vec<Vec<DVec3>>, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut vertices: Vec<DVec3> = Vec::new();
+    let mut faces = Vec::new();
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        let here = || format!("{}:{}", path.display(), n + 1);
+        match words.next() {
+            Some("v") => {
+                let v: Result<Vec<f64>, _> = words.take(3).map(str::parse::<f64>).collect();
+                match v {
+                    Ok(v) if v.len() == 3 => vertices.push(DVec3::new(v[0], v[1], v[2])),
+                    _ => {
+                        return Err(format!(
+                            "{}: expected \"v x y z\", found \"{}\"",
+                            here(),
+                            raw.trim()
+                        ))
+                    }
+                }
+            }
+            Some("f") => {
+                let mut face = Vec::new();
+                for w in words {
+                    let first = w.split('/').next().unwrap_or("");
+                    let index: i64 = first.parse().map_err(|_| {
+                        format!("{}: expected vertex indices, found \"{w}\"", here())
+                    })?;
+                    let k = if index > 0 {
+                        index - 1
+                    } else {
+                        vertices.len() as i64 + index
+                    };
+                    if index == 0 || k < 0 || k >= vertices.len() as i64 {
+                        return Err(format!(
+                            "{}: vertex index {index} out of range (1 to {} defined so far)",
+                            here(),
+                            vertices.len()
+                        ));
+                    }
+                    face.push(vertices[k as usize]);
+                }
+                faces.push(face);
+            }
+            _ => {}
+        }
+    }
+    if faces.is_empty() {
+        return Err(format!("{}: no face (\"f\" record) found", path.display()));
+    }
+    Ok(faces)
 }
 
 /// Writes a binary STL (normals from the corner order).

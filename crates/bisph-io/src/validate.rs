@@ -125,6 +125,11 @@ pub trait ValidationCase: Sync {
     fn description(&self) -> &'static str;
     /// Runs the case (quick or full resolution) writing its outputs under `out`.
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String>;
+    /// `false` for cases too expensive for `--quick` runs of the whole registry (CI): they run
+    /// at full resolution, or at their quick resolution only when named explicitly.
+    fn in_quick_suite(&self) -> bool {
+        true
+    }
 }
 
 /// Every validation case bisph knows.
@@ -133,7 +138,9 @@ pub fn registry() -> Vec<Box<dyn ValidationCase>> {
     cases.extend(crate::paper1_cases::cases());
     cases.extend(crate::paper2_cases::cases());
     cases.extend(crate::paper3_cases::cases());
+    cases.extend(crate::paper3_flow_cases::cases());
     cases.extend(crate::pack_cases::cases());
+    cases.extend(crate::rigid_cases::cases());
     cases
 }
 

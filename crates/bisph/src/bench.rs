@@ -1,53 +1,203 @@
-//! `bisph bench`: throughput of the explicit scheme on the 2-D dam break.
+//! `bisph bench`: throughput suite of the explicit scheme on the built-in dam breaks.
 //!
-//! The built-in dam break is refined to about `--particles` fluid particles and advanced a
-//! fixed number of steps (after warm-up, no output) at `h/dx = 2` and at support
-//! `2h = 2.83 dx` (the neighbour count DualSPHysics uses), with 1 and 2 threads.
-//! Reported: particle-steps per second, pair interactions per second (fluid pairs within the
-//! support, each counted from both sides, self included), ns per interaction, the share of
-//! each phase (neighbour search, reordering, rate evaluation with its wall terms, the rest of
-//! the integration) and the resident memory per particle.
+//! Each configuration (dimension, particle count, `h/dx`, threads) runs in a child process of
+//! its own, so that its peak memory is its own: the dam break is refined to about the asked
+//! number of fluid particles, warmed up for three steps, then advanced a fixed number of
+//! Verlet steps (one force evaluation per step, no output).
+//!
+//! Reported per configuration: particle-steps per second, pair interactions per second (fluid
+//! pairs within the support, each counted from both sides, self included), ns per interaction,
+//! the share of each phase (neighbour search, reordering, forces with their fused wall terms,
+//! wall pressures, the rest of the integration) and the peak memory per particle (peak resident
+//! set minus the resident set before the case was built, over the particle count).
+//!
+//! Suites: `quick` (2-D 20k), `standard` (2-D 20k and 200k, 3-D 100k), `full` (adds 2-D 1M and
+//! 3-D 1M); each at `2h = 2.83 dx` (the neighbour count of DualSPHysics) and `h/dx = 2`, with
+//! 1 and 2 threads. `--particles` and `--dim` replace the suite's sizes.
+//!
+//! Suite `shepard` (paper 2, table 1): the cost of the Shepard factor on the paper-2 still-water
+//! tank (`bi` walls) with discrete and geometric gamma, against the energy-conserving walls
+//! (no renormalisation, gamma = 1), at 10k and 50k particles.
 
 use bisph_core::Simulation;
-use bisph_io::build::build_simulation;
-use bisph_io::case::parse_case;
-use glam::DVec2;
-use serde_json::json;
+use bisph_io::build::{build_simulation, CaseDim};
+use bisph_io::case::{parse_case, LoadedCase};
+use glam::{DVec2, DVec3};
+use serde_json::{json, Value};
 use std::path::PathBuf;
+use std::process::Command;
 use std::time::Instant;
+
+/// The built-in 3-D dam break (the 2-D one is `bisph_io::case::DEFAULT_CASE`).
+const DAM_BREAK_3D: &str = include_str!("../../../cases/dam-break-3d.toml");
+
+/// Water volumes of the two dam breaks: 0.6 x 0.3 m and 0.6 x 0.3 x 0.3 m.
+const WATER_AREA_2D: f64 = 0.18;
+const WATER_VOLUME_3D: f64 = 0.054;
+/// Water area of paper 2's still-water tank, 0.9 x 0.092 m.
+const TANK_AREA: f64 = 0.0828;
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Suite {
+    /// 2-D, 20k particles.
+    Quick,
+    /// 2-D 20k and 200k, 3-D 100k.
+    Standard,
+    /// 2-D 20k, 200k and 1M, 3-D 100k and 1M.
+    Full,
+    /// Shepard factor cost on the still-water tank: discrete, geometric, none; 10k and 50k.
+    Shepard,
+}
+
+/// The benchmarked case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum BenchCase {
+    /// The built-in dam break of the configuration's dimension.
+    DamBreak,
+    /// Paper 2's still-water tank with `bi` walls and discrete gamma.
+    TankDiscrete,
+    /// The same with geometric gamma.
+    TankGeometric,
+    /// The same tank with the energy-conserving walls (gamma = 1).
+    TankEnergy,
+}
+
+impl BenchCase {
+    const ALL: [(BenchCase, &'static str); 4] = [
+        (BenchCase::DamBreak, "dam-break"),
+        (BenchCase::TankDiscrete, "tank-discrete"),
+        (BenchCase::TankGeometric, "tank-geometric"),
+        (BenchCase::TankEnergy, "tank-energy"),
+    ];
+
+    fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(c, _)| *c == self)
+            .map_or("", |(_, n)| n)
+    }
+
+    fn parse(text: &str) -> Option<BenchCase> {
+        Self::ALL.iter().find(|(_, n)| *n == text).map(|(c, _)| *c)
+    }
+}
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Approximate number of fluid particles.
-    #[arg(long, default_value_t = 100_000)]
-    particles: usize,
-    /// Timed steps per configuration.
-    #[arg(long, default_value_t = 40)]
-    steps: u64,
+    /// Which set of configurations to run.
+    #[arg(long, value_enum, default_value = "standard")]
+    suite: Suite,
+    /// Particle counts to run instead of the suite's (with `--dim`).
+    #[arg(long, value_delimiter = ',')]
+    particles: Vec<usize>,
+    /// Dimension of the `--particles` runs.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u8).range(2..=3))]
+    dim: u8,
+    /// Smoothing lengths over spacing (default: 1.415, i.e. 2h = 2.83 dx, and 2).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1.415, 2.0])]
+    h_over_dx: Vec<f64>,
     /// Thread counts to measure.
     #[arg(long, value_delimiter = ',', default_values_t = vec![1, 2])]
     threads: Vec<usize>,
+    /// Timed steps per configuration (default: about 8 M particle-steps in 2-D, 2 M in 3-D,
+    /// between 3 and 100).
+    #[arg(long)]
+    steps: Option<u64>,
     /// Also write the results as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Internal: run one configuration `case,dim,particles,h_over_dx,threads,steps` in this
+    /// process and print its result as JSON.
+    #[arg(long, hide = true)]
+    single: Option<String>,
 }
 
-/// One measured configuration.
-struct Row {
-    particles: f64,
-    neighbours: f64,
-    particle_steps: f64,
-    pairs: f64,
-    timings: bisph_core::simulation::PhaseTimes,
-    bytes: f64,
+/// One configuration of the suite.
+#[derive(Clone, Copy, Debug)]
+struct Config {
+    case: BenchCase,
+    dim: u8,
+    particles: usize,
+    h_over_dx: f64,
+    threads: usize,
+    steps: u64,
+}
+
+impl Config {
+    fn parse(text: &str) -> Result<Config, String> {
+        let bad =
+            || format!("--single expects case,dim,particles,h_over_dx,threads,steps, got {text:?}");
+        let parts: Vec<&str> = text.split(',').collect();
+        let [case, dim, particles, h, threads, steps] = parts[..] else {
+            return Err(bad());
+        };
+        Ok(Config {
+            case: BenchCase::parse(case).ok_or_else(bad)?,
+            dim: dim.parse().map_err(|_| bad())?,
+            particles: particles.parse().map_err(|_| bad())?,
+            h_over_dx: h.parse().map_err(|_| bad())?,
+            threads: threads.parse().map_err(|_| bad())?,
+            steps: steps.parse().map_err(|_| bad())?,
+        })
+    }
+
+    fn encode(&self) -> String {
+        format!(
+            "{},{},{},{},{},{}",
+            self.case.name(),
+            self.dim,
+            self.particles,
+            self.h_over_dx,
+            self.threads,
+            self.steps
+        )
+    }
 }
 
 pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
-    // Water column 0.6 x 0.3 m of the default case.
-    let dx = (0.18 / args.particles.max(100) as f64).sqrt();
-    let mut results = Vec::new();
+    if let Some(single) = &args.single {
+        let result = run_single(Config::parse(single).map_err(|e| (1, e))?)?;
+        println!("{result}");
+        return Ok(());
+    }
+    let dam = BenchCase::DamBreak;
+    let sizes: Vec<(BenchCase, u8, usize)> = if !args.particles.is_empty() {
+        args.particles.iter().map(|&n| (dam, args.dim, n)).collect()
+    } else {
+        match args.suite {
+            Suite::Quick => vec![(dam, 2, 20_000)],
+            Suite::Standard => vec![(dam, 2, 20_000), (dam, 2, 200_000), (dam, 3, 100_000)],
+            Suite::Full => vec![
+                (dam, 2, 20_000),
+                (dam, 2, 200_000),
+                (dam, 2, 1_000_000),
+                (dam, 3, 100_000),
+                (dam, 3, 1_000_000),
+            ],
+            Suite::Shepard => [10_000, 50_000]
+                .into_iter()
+                .flat_map(|n| {
+                    [
+                        BenchCase::TankDiscrete,
+                        BenchCase::TankGeometric,
+                        BenchCase::TankEnergy,
+                    ]
+                    .map(|c| (c, 2, n))
+                })
+                .collect(),
+        }
+    };
+    // Paper 2's tank is run at its own h/dx = 2.
+    let h_list = if matches!(args.suite, Suite::Shepard) && args.particles.is_empty() {
+        vec![2.0]
+    } else {
+        args.h_over_dx.clone()
+    };
+    let exe = std::env::current_exe().map_err(|e| (1, format!("cannot find bisph itself: {e}")))?;
     println!(
-        "{:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
+        "case",
+        "dim",
         "h/dx",
         "threads",
         "particles",
@@ -57,82 +207,45 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         "ns/pair",
         "nbr%",
         "reord%",
-        "rates%",
+        "force%",
+        "wall%",
         "integ%",
         "B/part"
     );
-    for h_over_dx in [2.0, 2.83 / 2.0] {
-        let overrides = vec![
-            format!("resolution.dx={dx}"),
-            format!("resolution.h_over_dx={h_over_dx}"),
-            "output.plots=false".into(),
-        ];
-        let loaded = parse_case("<bench>", bisph_io::case::DEFAULT_CASE, &overrides)
-            .map_err(|e| (1, e.to_string()))?;
-        for &threads in &args.threads {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|e| (1, e.to_string()))?;
-            let row = pool.install(|| -> Result<_, (u8, String)> {
-                let mut sim: Simulation<DVec2> =
-                    build_simulation(&loaded).map_err(|e| (1, e.to_string()))?;
-                for _ in 0..3 {
-                    sim.advance(None).map_err(|e| (3, e.to_string()))?;
+    let mut results = Vec::new();
+    for &(case, dim, particles) in &sizes {
+        let budget = if dim == 2 { 8.0e6 } else { 2.0e6 };
+        let steps = args
+            .steps
+            .unwrap_or(((budget / particles.max(1) as f64) as u64).clamp(3, 100));
+        for &h_over_dx in h_list.iter() {
+            for &threads in &args.threads {
+                let config = Config {
+                    case,
+                    dim,
+                    particles,
+                    h_over_dx,
+                    threads,
+                    steps,
+                };
+                let output = Command::new(&exe)
+                    .args(["bench", "--single", &config.encode()])
+                    .output()
+                    .map_err(|e| (1, format!("cannot start a benchmark process: {e}")))?;
+                if !output.status.success() {
+                    return Err((
+                        3,
+                        format!(
+                            "benchmark {config:?} failed: {}",
+                            String::from_utf8_lossy(&output.stderr).trim()
+                        ),
+                    ));
                 }
-                let pairs_per_step = sim.count_pairs() as f64;
-                sim.timings = Default::default();
-                let start = Instant::now();
-                for _ in 0..args.steps {
-                    sim.advance(None).map_err(|e| (3, e.to_string()))?;
-                }
-                let seconds = start.elapsed().as_secs_f64();
-                let n = sim.fluid.len() as f64;
-                let steps = args.steps as f64;
-                let bytes = resident_bytes().unwrap_or(0) as f64 / n;
-                Ok(Row {
-                    particles: n,
-                    neighbours: pairs_per_step / n,
-                    particle_steps: n * steps / seconds,
-                    pairs: pairs_per_step * steps / seconds,
-                    timings: sim.timings,
-                    bytes,
-                })
-            })?;
-            let Row {
-                particles: n,
-                neighbours,
-                particle_steps: psps,
-                pairs,
-                timings: t,
-                bytes,
-            } = row;
-            let share = |x: f64| 100.0 * x / t.steps.max(1e-12);
-            let integration = t.steps - t.neighbours - t.rates;
-            println!(
-                "{:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>8.0}",
-                h_over_dx,
-                threads,
-                n,
-                neighbours,
-                psps,
-                pairs,
-                1e9 / pairs,
-                share(t.neighbours - t.reorder),
-                share(t.reorder),
-                share(t.rates),
-                share(integration),
-                bytes
-            );
-            results.push(json!({
-                "case": "dam-break-2d", "h_over_dx": h_over_dx, "threads": threads, "particles": n,
-                "neighbours_per_particle": neighbours, "particle_steps_per_second": psps,
-                "pair_interactions_per_second": pairs, "ns_per_interaction": 1e9 / pairs,
-                "steps": args.steps,
-                "seconds_neighbour_search": t.neighbours - t.reorder, "seconds_reorder": t.reorder,
-                "seconds_rates": t.rates, "seconds_integration": integration, "seconds_steps": t.steps,
-                "resident_bytes_per_particle": bytes,
-            }));
+                let row: Value = serde_json::from_slice(&output.stdout)
+                    .map_err(|e| (1, format!("benchmark {config:?}: unreadable result: {e}")))?;
+                print_row(&row);
+                results.push(row);
+            }
         }
     }
     if let Some(path) = args.json {
@@ -143,10 +256,106 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     Ok(())
 }
 
-/// Resident memory of this process (Linux `/proc/self/status`), in bytes.
-fn resident_bytes() -> Option<u64> {
+fn print_row(row: &Value) {
+    let f = |key: &str| row[key].as_f64().unwrap_or(f64::NAN);
+    let share = |key: &str| 100.0 * f(key) / f("seconds_steps").max(1e-12);
+    println!(
+        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
+        row["case"].as_str().unwrap_or("?"),
+        f("dim"),
+        f("h_over_dx"),
+        f("threads"),
+        f("particles"),
+        f("neighbours_per_particle"),
+        f("particle_steps_per_second"),
+        f("pair_interactions_per_second"),
+        f("ns_per_interaction"),
+        share("seconds_neighbour_search"),
+        share("seconds_reorder"),
+        share("seconds_forces"),
+        share("seconds_wall_pressure"),
+        share("seconds_integration"),
+        f("peak_bytes_per_particle"),
+    );
+}
+
+/// Runs one configuration in this process.
+fn run_single(config: Config) -> Result<Value, (u8, String)> {
+    let baseline = memory_kib("VmRSS:").unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(config.threads)
+        .build()
+        .map_err(|e| (1, e.to_string()))?;
+    let n = config.particles.max(100) as f64;
+    let (text, dx) = match (config.case, config.dim) {
+        (BenchCase::DamBreak, 2) => (bisph_io::case::DEFAULT_CASE, (WATER_AREA_2D / n).sqrt()),
+        (BenchCase::DamBreak, _) => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
+        _ => (bisph_io::paper2_cases::TANK, (TANK_AREA / n).sqrt()),
+    };
+    let mut overrides = vec![
+        format!("resolution.dx={dx}"),
+        format!("resolution.h_over_dx={}", config.h_over_dx),
+        "time.integrator=\"verlet\"".into(),
+        "output.plots=false".into(),
+    ];
+    match config.case {
+        BenchCase::DamBreak => {}
+        BenchCase::TankDiscrete => overrides.push("shepard=\"discrete\"".into()),
+        BenchCase::TankGeometric => overrides.push("shepard=\"geometric\"".into()),
+        BenchCase::TankEnergy => overrides.push("boundary=\"energy\"".into()),
+    }
+    let loaded = parse_case("<bench>", text, &overrides).map_err(|e| (1, e.to_string()))?;
+    pool.install(|| match config.dim {
+        2 => measure::<DVec2>(&loaded, config, baseline),
+        _ => measure::<DVec3>(&loaded, config, baseline),
+    })
+}
+
+fn measure<V: CaseDim>(
+    loaded: &LoadedCase,
+    config: Config,
+    baseline_kib: u64,
+) -> Result<Value, (u8, String)> {
+    let mut sim: Simulation<V> = build_simulation(loaded).map_err(|e| (1, e.to_string()))?;
+    for _ in 0..3 {
+        sim.advance(None).map_err(|e| (3, e.to_string()))?;
+    }
+    let pairs_per_step = sim.count_pairs() as f64;
+    sim.timings = Default::default();
+    let start = Instant::now();
+    for _ in 0..config.steps {
+        sim.advance(None).map_err(|e| (3, e.to_string()))?;
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let n = sim.fluid.len() as f64;
+    let steps = config.steps as f64;
+    let peak = memory_kib("VmHWM:")
+        .unwrap_or(0)
+        .saturating_sub(baseline_kib);
+    let t = sim.timings;
+    let pairs = pairs_per_step * steps / seconds;
+    Ok(json!({
+        "case": match (config.case, config.dim) {
+            (BenchCase::DamBreak, 2) => "dam-break-2d",
+            (BenchCase::DamBreak, _) => "dam-break-3d",
+            (other, _) => other.name(),
+        },
+        "dim": config.dim, "h_over_dx": config.h_over_dx, "threads": config.threads,
+        "particles": n, "wall_elements": sim.walls.elements.len(), "steps": config.steps,
+        "neighbours_per_particle": pairs_per_step / n,
+        "particle_steps_per_second": n * steps / seconds,
+        "pair_interactions_per_second": pairs, "ns_per_interaction": 1e9 / pairs,
+        "seconds_per_step": seconds / steps,
+        "seconds_neighbour_search": t.neighbours - t.reorder, "seconds_reorder": t.reorder,
+        "seconds_forces": t.rates - t.wall_pressure, "seconds_wall_pressure": t.wall_pressure,
+        "seconds_integration": t.steps - t.neighbours - t.rates, "seconds_steps": t.steps,
+        "peak_bytes_per_particle": (peak * 1024) as f64 / n,
+    }))
+}
+
+/// A `/proc/self/status` memory line (`VmRSS:`, `VmHWM:`), in KiB (Linux).
+fn memory_kib(key: &str) -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }

@@ -2,11 +2,14 @@
 
 mod bench;
 
-use bisph_io::{load_case, run_case, Progress, RunError};
+use bisph_io::{load_case, resume_case, run_case_with, Progress, RunError, RunOptions};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use signal_hook::consts::{SIGINT, SIGTERM};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(name = "bisph", version, about = "Boundary-integral SPH solver")]
@@ -94,9 +97,20 @@ struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Continue the run whose output directory is DIR from its checkpoint (no case argument).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["case", "out", "overrides"])]
+    resume: Option<PathBuf>,
+    /// Write a checkpoint every N steps (overrides checkpoint.every_steps).
+    #[arg(long, value_name = "N")]
+    checkpoint_steps: Option<u64>,
+    /// Write a checkpoint every M wall-clock minutes (overrides checkpoint.every_minutes).
+    #[arg(long, value_name = "M")]
+    checkpoint_minutes: Option<f64>,
 }
 
-/// Exit codes: 0 success, 1 bad input or I/O error, 3 the simulation stopped early.
+/// Exit codes: 0 success, 1 bad input, 2 validation out of tolerance, 4 I/O error,
+/// 5 checkpoint refused, 6 not enough memory, 10 interrupted (checkpoint written),
+/// 20-26 a divergence watch tripped (docs/errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -132,11 +146,42 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
 
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
     set_threads(args.threads)?;
-    let loaded =
-        load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
-    let out = args
-        .out
-        .unwrap_or_else(|| bisph_io::case::default_out_dir(&loaded.case));
+    let (loaded, out) = match &args.resume {
+        Some(dir) => (
+            resume_case(dir).map_err(|e| (e.exit_code(), e.to_string()))?,
+            dir.clone(),
+        ),
+        None => {
+            let loaded =
+                load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
+            let out = args
+                .out
+                .clone()
+                .unwrap_or_else(|| bisph_io::case::default_out_dir(&loaded.case));
+            (loaded, out)
+        }
+    };
+    if let Some(m) = args.checkpoint_minutes {
+        if !(m >= 0.0 && m.is_finite()) {
+            return Err((
+                1,
+                format!("--checkpoint-minutes: expected zero or a positive number, found {m}"),
+            ));
+        }
+    }
+    // SIGINT/SIGTERM: finish the step, checkpoint, exit 10. A second signal ends at once.
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(signal, 10, Arc::clone(&stop))
+            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&stop)))
+            .map_err(|e| (1, format!("cannot install the signal handler: {e}")))?;
+    }
+    let options = RunOptions {
+        checkpoint_steps: args.checkpoint_steps,
+        checkpoint_minutes: args.checkpoint_minutes,
+        stop: Some(&stop),
+        resume: args.resume.is_some(),
+    };
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
@@ -157,7 +202,7 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             ));
         }
     };
-    let result = run_case(&loaded, &out, &mut report);
+    let result = run_case_with(&loaded, &out, &options, &mut report);
     bar.finish_and_clear();
     match result {
         Ok(s) => {
@@ -174,10 +219,18 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             );
             Ok(())
         }
-        Err(RunError::Stopped(e)) => {
-            Err((3, format!("{e}; outputs so far kept in {}", out.display())))
-        }
-        Err(e) => Err((1, e.to_string())),
+        Err(e @ RunError::Stopped(_)) => Err((
+            e.exit_code(),
+            format!(
+                "{e}; outputs up to the last good state kept in {}, see diagnostics.json",
+                out.display()
+            ),
+        )),
+        Err(e @ RunError::Interrupted { .. }) => Err((
+            e.exit_code(),
+            format!("{e}; continue with: bisph run --resume {}", out.display()),
+        )),
+        Err(e) => Err((e.exit_code(), e.to_string())),
     }
 }
 
@@ -262,10 +315,17 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
         .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
     let mut reports = Vec::new();
     let mut failed = Vec::new();
-    for case in cases
-        .iter()
-        .filter(|c| args.names.is_empty() || args.names.iter().any(|n| n == c.name()))
-    {
+    for case in cases.iter().filter(|c| {
+        if args.names.is_empty() && args.quick && !c.in_quick_suite() {
+            eprintln!(
+                "skipping {} in --quick (full only; `bisph validate --quick {}` runs its reduced variant)",
+                c.name(),
+                c.name()
+            );
+            return false;
+        }
+        args.names.is_empty() || args.names.iter().any(|n| n == c.name())
+    }) {
         eprintln!(
             "validating {} ({})",
             case.name(),

@@ -13,10 +13,16 @@
 //!    zero on the last pass; stop when `R < tolerance` or after `max_iterations`.
 //!
 //! Then `u^{n+1} = u^n + dt a`, `r^{n+1} = r^n + dt (u^n + u^{n+1}) / 2`,
-//! `rho^{n+1} = rho^n + dt rhodot`; pistons iterate with the fluid (their midpoint velocity
-//! drives their elements, their acceleration joins the residue and the relaxation); the wall work grows by `dt sum_j F_j . U_j` at the
-//! midpoint: at convergence the fluid's energy change and the wall work balance exactly, up to
-//! the midpoint rule of the compression energy.
+//! `rho^{n+1} = rho^n + dt rhodot`. Dynamic bodies (pistons and free rigid bodies) iterate
+//! with the fluid on their generalised velocities `V` and accelerations `A`
+//! ([`crate::walls::Motion::velocities`]): `V^{n+1/2} = V^n + dt/2 A` drives their elements,
+//! `A` is re-evaluated from the wall loads each pass and joins the residue
+//! (`sum_k I_k |V_k (A'_k - A_k)|`) and the relaxation; then `V^{n+1} = V^n + dt A` and the
+//! bodies drift with `V^{n+1/2}`. Staggered free bodies keep the accelerations of the previous
+//! step through the iterations and take the new load after it (loose coupling). The wall
+//! work grows by `dt sum_j F_j . U_j` at the midpoint: at convergence the fluid's energy
+//! change, the wall work and the bodies' kinetic + gravity energy balance exactly, up to the
+//! midpoint rule of the compression energy.
 
 use super::Simulation;
 use crate::dim::Vector;
@@ -62,8 +68,9 @@ impl<V: Vector> Simulation<V> {
         let half = 0.5 * dt;
         let t_mid = self.time + half;
         self.walls.set_velocities_at(t_mid);
-        let piston_start: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
-        let mut piston_previous: Vec<f64> = Vec::new();
+        let body_start = self.walls.dynamic_velocities();
+        let body_inertia = self.walls.dynamic_inertias();
+        let mut body_velocity = body_start.clone();
         let mut relaxation = params.initial_relaxation;
         let mut previous_residue = f64::INFINITY;
         let mut iterations = 0;
@@ -76,17 +83,20 @@ impl<V: Vector> Simulation<V> {
                 s.previous_density_rate.clone_from(&f.density_rate);
             }
             self.stage_state(half);
-            piston_previous.clear();
-            for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
-                p.velocity = v0 + half * p.acceleration;
-                piston_previous.push(p.acceleration);
+            let body_previous = self.walls.dynamic_accelerations();
+            for (k, v) in body_velocity.iter_mut().enumerate() {
+                *v = body_start[k] + half * body_previous[k];
             }
+            self.walls.set_dynamic_velocities(&body_velocity);
             self.walls.set_velocities_at(t_mid);
             self.evaluate_rates();
-            self.store_piston_accelerations();
+            let mut body_acceleration = self.walls.body_accelerations(false);
             residue = self.residue();
-            for (p, &old) in self.walls.pistons_mut().zip(&piston_previous) {
-                residue += (p.mass * p.velocity * (p.acceleration - old)).abs();
+            for k in 0..body_acceleration.len() {
+                residue += (body_inertia[k]
+                    * body_velocity[k]
+                    * (body_acceleration[k] - body_previous[k]))
+                    .abs();
             }
             let converged = residue < params.tolerance;
             if m > 0 && residue > params.min_decrease * previous_residue {
@@ -111,10 +121,11 @@ impl<V: Vector> Simulation<V> {
                     .par_iter_mut()
                     .zip(s.previous_density_rate.par_iter())
                     .for_each(|(d, &old)| *d = keep * old + (1.0 - keep) * *d);
-                for (p, &old) in self.walls.pistons_mut().zip(&piston_previous) {
-                    p.acceleration = keep * old + (1.0 - keep) * p.acceleration;
+                for (a, &old) in body_acceleration.iter_mut().zip(&body_previous) {
+                    *a = keep * old + (1.0 - keep) * *a;
                 }
             }
+            self.walls.set_dynamic_accelerations(&body_acceleration);
             if converged {
                 break;
             }
@@ -123,10 +134,19 @@ impl<V: Vector> Simulation<V> {
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;
         self.viscous_dissipation += dt * self.viscous_power;
-        for (p, &v0) in self.walls.pistons_mut().zip(&piston_start) {
-            p.position += dt * (v0 + half * p.acceleration);
-            p.velocity = v0 + dt * p.acceleration;
+        // Bodies: drift with the midpoint velocities, then V^{n+1} = V^n + dt A.
+        let body_acceleration = self.walls.dynamic_accelerations();
+        for (k, v) in body_velocity.iter_mut().enumerate() {
+            *v = body_start[k] + half * body_acceleration[k];
         }
+        self.walls.set_dynamic_velocities(&body_velocity);
+        // Staggered bodies take the load of this step for the next one.
+        self.walls.update_staggered();
+        self.walls.drift_bodies(dt);
+        for (k, v) in body_velocity.iter_mut().enumerate() {
+            *v = body_start[k] + dt * body_acceleration[k];
+        }
+        self.walls.set_dynamic_velocities(&body_velocity);
 
         // Corrector: u^{n+1} = u^n + dt a, drift (u^n + u^{n+1}) / 2.
         let f = &mut self.fluid;
@@ -158,6 +178,15 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(drift.par_iter())
             .for_each(|(r, &u)| *r += u * dt);
+        super::advance_gamma(
+            &self.config,
+            &self.walls,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+            &f.position,
+            drift,
+            dt,
+        );
         f.density
             .par_iter_mut()
             .zip(f.density_rate.par_iter())

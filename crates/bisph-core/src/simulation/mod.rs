@@ -16,9 +16,12 @@ use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
-use crate::terms::{compute_rates, DensityDiffusion, RateModel, Viscosity};
+use crate::terms::{
+    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, RateModel, Viscosity,
+};
 use crate::walls::energy_bi::EnergyConservingWalls;
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
+use crate::walls::usaw::{self, UsawWalls, Vertices, WallInterpolation};
 use crate::walls::WallModel;
 use crate::walls::Walls;
 use rayon::prelude::*;
@@ -32,6 +35,54 @@ pub enum WallModelChoice {
     Energy,
     /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
     ShepardBi(ShepardKind),
+    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
+    Usaw(UsawParams),
+}
+
+impl WallModelChoice {
+    /// `true` when the particles carry an integrated gamma (paper 3, eq 4).
+    pub fn needs_gamma(&self) -> bool {
+        matches!(
+            self,
+            WallModelChoice::Usaw(_) | WallModelChoice::ShepardBi(ShepardKind::Integrated)
+        )
+    }
+
+    /// `true` when gamma is integrated in time (else recomputed geometrically every step).
+    fn integrates_gamma(&self) -> bool {
+        match self {
+            WallModelChoice::Usaw(p) => !p.geometric_gamma,
+            WallModelChoice::ShepardBi(ShepardKind::Integrated) => true,
+            _ => false,
+        }
+    }
+}
+
+/// Options of the semi-analytical walls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct UsawParams {
+    /// How vertex pressures are extrapolated (paper 3, eqs 16-17, 82, 83).
+    pub interpolation: WallInterpolation,
+    /// Recompute gamma geometrically (paper 2) every step instead of integrating eq 4.
+    pub geometric_gamma: bool,
+}
+
+/// Which density diffusion the continuity equation carries (off when its coefficient is 0).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub enum DiffusionChoice {
+    /// delta-SPH with coefficient `delta` ([`SimConfig::delta`]). The default.
+    #[default]
+    Delta,
+    /// Mayrhofer's volume diffusion, paper 3 eqs 44 and 48: `K = c0 dx / eta`.
+    Mayrhofer {
+        /// `eta` of eq 48 (`O(10)-O(100)`).
+        eta: f64,
+    },
+    /// Ferrari's Riemann form, paper 3 eqs 49-51, times `coefficient` (1 = as printed).
+    Ferrari {
+        /// Multiplier of the term.
+        coefficient: f64,
+    },
 }
 
 /// Wall-clock seconds spent in each phase of the time loop (summed over steps).
@@ -43,6 +94,8 @@ pub struct PhaseTimes {
     pub reorder: f64,
     /// Rate evaluations: equation of state, fluid and wall terms, wall pressures.
     pub rates: f64,
+    /// Of which the wall pressures (extrapolation to the elements before the sweep).
+    pub wall_pressure: f64,
     /// Whole steps (so integration = steps - neighbours - rates).
     pub steps: f64,
 }
@@ -93,6 +146,15 @@ pub struct SimConfig<V: Vector> {
     pub viscosity: Viscosity,
     /// A driving force imposing a volume flux (paper 3, section 5).
     pub flux: Option<FluxControl<V>>,
+    /// Density diffusion form (its hydrostatic correction is [`SimConfig::delta_hydrostatic`]).
+    pub diffusion: DiffusionChoice,
+    /// The density power `k` of paper 3, eqs 37-38 (0 or 1).
+    pub density_power: u8,
+    /// Initial particle spacing `dx` (vertex volumes, `K = c0 dx / eta`).
+    pub particle_spacing: f64,
+    /// Density by summation, `gamma rho = sum_P m W + C` (paper 3, eqs 13 and 84; usaw only,
+    /// explicit Verlet), instead of the continuity equation (eq 12).
+    pub summation_density: bool,
 }
 
 /// Scratch buffers reused every step.
@@ -195,11 +257,31 @@ impl<V: Vector> Simulation<V> {
         sim.wrap_positions();
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
+        if let WallModelChoice::Usaw(_) = sim.config.wall_model {
+            sim.walls.vertices = Vertices::from_elements(
+                &sim.walls.elements,
+                sim.config.eos.rho0(),
+                cell,
+                sim.config.particle_spacing,
+            )
+            .unwrap_or_default();
+        }
         sim.rebuild_grid(true);
+        if sim.config.wall_model.needs_gamma() {
+            sim.geometric_gamma();
+        }
+        if sim.summation() {
+            // C_i = gamma_i rho_i - sum_P m_j W_ij: the initial densities are kept.
+            let sums = sim.kernel_sums();
+            let f = &mut sim.fluid;
+            for (i, s) in sums.iter().enumerate() {
+                f.density_offset[i] = f.gamma[i] * f.density[i] - s;
+            }
+        }
         sim.scratch.velocity = sim.fluid.velocity.clone();
         sim.scratch.density = sim.fluid.density.clone();
         sim.evaluate_rates();
-        sim.store_piston_accelerations();
+        sim.store_body_accelerations(true);
         sim.refresh_pressure();
         let bulk = sim.bulk_velocity();
         sim.flux_history = FluxHistory {
@@ -273,14 +355,90 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
-    /// Pistons' accelerations from the wall pressures of the last rate evaluation.
-    pub(crate) fn store_piston_accelerations(&mut self) {
-        let acc = self.walls.piston_accelerations();
-        for (body, a) in self.walls.bodies.iter_mut().zip(acc) {
-            if let crate::walls::Motion::Piston(p) = &mut body.motion {
-                p.acceleration = a;
-            }
+    /// Sets every particle's gamma to the geometric Shepard factor (paper 2) and its
+    /// `grad gamma` (paper 3, eq 10) at the current positions.
+    pub fn geometric_gamma(&mut self) {
+        let kernel = self.config.kernel;
+        let (e, g) = (&self.walls.elements, &self.walls.grid);
+        let f = &mut self.fluid;
+        f.gamma
+            .par_iter_mut()
+            .zip(f.grad_gamma.par_iter_mut())
+            .zip(f.position.par_iter())
+            .for_each(|((gamma, grad), &x)| {
+                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
+                *grad = usaw::grad_gamma(&kernel, x, e, g);
+            });
+    }
+
+    /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]).
+    pub(crate) fn advance_gamma(&mut self, dt: f64) {
+        let f = &mut self.fluid;
+        advance_gamma(
+            &self.config,
+            &self.walls,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+            &f.position,
+            &f.velocity,
+            dt,
+        );
+    }
+
+    /// `true` when the densities come from summation (paper 3, eq 84).
+    pub(crate) fn summation(&self) -> bool {
+        self.config.summation_density && matches!(self.config.wall_model, WallModelChoice::Usaw(_))
+    }
+
+    /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
+    fn kernel_sums(&self) -> Vec<f64> {
+        let kernel = self.config.kernel;
+        let (f, v, grid) = (&self.fluid, &self.walls.vertices, &self.fluid_grid);
+        (0..f.len())
+            .into_par_iter()
+            .map(|i| {
+                let x = f.position[i];
+                let mut s = 0.0;
+                grid.for_each_neighbour(x, &f.position, kernel.support, |j, _, r| {
+                    s += f.mass[j] * kernel.value(r);
+                });
+                v.grid
+                    .for_each_neighbour(x, &v.position, kernel.support, |j, _, r| {
+                        s += v.mass[j] * kernel.value(r);
+                    });
+                s
+            })
+            .collect()
+    }
+
+    /// Paper 3, eq 84, after a drift by `dt`: `C_i += dt gamma_i D_i` with the diffusion rate
+    /// `D_i` of the last evaluation (held in `density_rate`), then
+    /// `rho_i = (sum_P m_j W_ij + C_i) / gamma_i` at the new positions; the density rates are
+    /// cleared so the staged state uses these densities.
+    pub(crate) fn summation_densities(&mut self, dt: f64) {
+        let sums = self.kernel_sums();
+        let f = &mut self.fluid;
+        for (i, s) in sums.iter().enumerate() {
+            f.density_offset[i] += dt * f.gamma[i] * f.density_rate[i];
+            f.density[i] = (s + f.density_offset[i]) / f.gamma[i];
+            f.density_rate[i] = 0.0;
         }
+    }
+
+    /// Re-evaluates the rates at the stored state (after editing velocities or densities by
+    /// hand, e.g. to set an initial velocity field).
+    pub fn refresh_rates(&mut self) {
+        self.stage_state(0.0);
+        self.evaluate_rates();
+        self.store_body_accelerations(true);
+        self.refresh_pressure();
+    }
+
+    /// Dynamic bodies' accelerations from the wall pressures of the last rate evaluation
+    /// (staggered free bodies only when `all`).
+    pub(crate) fn store_body_accelerations(&mut self, all: bool) {
+        let acc = self.walls.body_accelerations(all);
+        self.walls.set_dynamic_accelerations(&acc);
     }
 
     /// The rate model handed to the sweep.
@@ -288,19 +446,31 @@ impl<V: Vector> Simulation<V> {
         let c = &self.config;
         let c0 = c.eos.c0();
         let hydrostatic_gradient = if c.delta_hydrostatic {
-            c.gravity * (-c.eos.rho0() / (c0 * c0))
+            c.gravity * (c.eos.rho0() / (c0 * c0))
         } else {
             V::ZERO
+        };
+        let (scale, form) = match c.diffusion {
+            DiffusionChoice::Delta => (c.delta * c.kernel.h * c0, DiffusionForm::Laplacian),
+            DiffusionChoice::Mayrhofer { eta } => {
+                (c0 * c.particle_spacing / eta, DiffusionForm::Laplacian)
+            }
+            DiffusionChoice::Ferrari { coefficient } => {
+                (coefficient, DiffusionForm::Riemann(c.eos))
+            }
         };
         RateModel {
             kernel: c.kernel,
             gravity: c.gravity,
             diffusion: DensityDiffusion {
-                scale: c.delta * c.kernel.h * c0,
+                scale,
                 hydrostatic_gradient,
+                form,
             },
             viscosity: c.viscosity,
             body_force: self.body_force,
+            density_power: c.density_power,
+            summation_density: self.summation(),
         }
     }
 
@@ -350,6 +520,7 @@ impl<V: Vector> Simulation<V> {
             pressure,
             acceleration,
             density_rate,
+            gamma,
             ..
         } = &mut self.fluid;
         pressure
@@ -371,9 +542,10 @@ impl<V: Vector> Simulation<V> {
             mass,
             pressure,
             volume,
+            gamma,
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
-        match self.config.wall_model {
+        self.timings.wall_pressure += match self.config.wall_model {
             WallModelChoice::Energy => sweep(
                 &model,
                 &EnergyConservingWalls,
@@ -400,7 +572,42 @@ impl<V: Vector> Simulation<V> {
                     viscous_power,
                 )
             }
-        }
+            WallModelChoice::Usaw(params) => {
+                let wall_start = Instant::now();
+                walls.vertices.update(
+                    &model.kernel,
+                    &eos,
+                    model.gravity,
+                    params.interpolation,
+                    &state,
+                    grid,
+                );
+                let Walls {
+                    elements,
+                    grid: wall_grid,
+                    vertices,
+                    ..
+                } = walls;
+                let usaw = UsawWalls {
+                    vertices,
+                    density_power: model.density_power,
+                };
+                usaw.update_wall_pressure(&model.kernel, elements, &state, grid);
+                let wall_seconds = wall_start.elapsed().as_secs_f64();
+                compute_rates(
+                    &model,
+                    &usaw,
+                    &state,
+                    grid,
+                    elements,
+                    wall_grid,
+                    acceleration,
+                    density_rate,
+                    viscous_power,
+                );
+                wall_seconds
+            }
+        };
         self.viscous_power = if model.viscosity.active() {
             let p = &self.scratch.viscous_power;
             crate::energy::deterministic_sum(p.len(), |i| p[i])
@@ -409,6 +616,81 @@ impl<V: Vector> Simulation<V> {
         };
         self.wall_power = self.walls.power();
         self.timings.rates += start.elapsed().as_secs_f64();
+    }
+
+    /// Skew-adjointness residual of the operators at the stored state (paper 3, eq 26, the
+    /// summand of eq 39): `<Grad p, u> + <p, Div u> = sum_a V_a (u_a . Grad_a p + p_a Div_a u)`
+    /// with the full (fluid + wall, renormalised) operators of the wall model in use. Zero
+    /// for skew-adjoint operators; summed in particle order (thread-independent).
+    pub fn skew_adjoint_residual(&mut self) -> f64 {
+        self.scratch.velocity.clone_from(&self.fluid.velocity);
+        self.scratch.density.clone_from(&self.fluid.density);
+        // Refresh pressures, volumes and wall values at the stored state.
+        let saved = (
+            self.fluid.acceleration.clone(),
+            self.fluid.density_rate.clone(),
+        );
+        let wall_power = self.wall_power;
+        self.evaluate_rates();
+        self.fluid.acceleration = saved.0;
+        self.fluid.density_rate = saved.1;
+        self.wall_power = wall_power;
+        let model = self.rate_model();
+        let f = &self.fluid;
+        let state = FluidState {
+            position: &f.position,
+            velocity: &f.velocity,
+            density: &f.density,
+            mass: &f.mass,
+            pressure: &f.pressure,
+            volume: &self.scratch.volume,
+            gamma: &f.gamma,
+        };
+        let (grid, walls) = (&self.fluid_grid, &self.walls);
+        let terms: Vec<f64> = (0..f.len())
+            .into_par_iter()
+            .map(|i| {
+                let op = match self.config.wall_model {
+                    WallModelChoice::Energy => particle_operators(
+                        &model,
+                        &EnergyConservingWalls,
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                    WallModelChoice::ShepardBi(shepard) => particle_operators(
+                        &model,
+                        &ShepardWalls {
+                            gravity: model.gravity,
+                            shepard,
+                        },
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                    WallModelChoice::Usaw(_) => particle_operators(
+                        &model,
+                        &UsawWalls {
+                            vertices: &walls.vertices,
+                            density_power: model.density_power,
+                        },
+                        &state,
+                        grid,
+                        &walls.elements,
+                        &walls.grid,
+                        i,
+                    ),
+                };
+                let grad = op.pressure_gradient + op.wall_pressure_gradient;
+                let div = op.velocity_divergence + op.wall_velocity_divergence;
+                state.volume[i] * (state.velocity[i].dot(grad) + state.pressure[i] * div)
+            })
+            .collect();
+        terms.iter().sum()
     }
 
     /// Time step for the next step: fixed, or `Co min(h / c0, sqrt(h / max|a|))`.
@@ -576,7 +858,41 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Wall pressures, then rates, for one wall model.
+/// Advances gamma after a drift `r += u dt` (paper 3, eq 4, fixed walls):
+/// `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (trapezoidal line integral), or the
+/// geometric value when so chosen. Does nothing for models without gamma.
+pub(crate) fn advance_gamma<V: Vector>(
+    config: &SimConfig<V>,
+    walls: &Walls<V>,
+    gamma: &mut [f64],
+    grad_gamma: &mut [V],
+    position: &[V],
+    drift: &[V],
+    dt: f64,
+) {
+    if !config.wall_model.needs_gamma() {
+        return;
+    }
+    let kernel = config.kernel;
+    let (e, g) = (&walls.elements, &walls.grid);
+    let integrate = config.wall_model.integrates_gamma();
+    gamma
+        .par_iter_mut()
+        .zip(grad_gamma.par_iter_mut())
+        .zip(position.par_iter().zip(drift.par_iter()))
+        .for_each(|((gamma, grad), (&x, &u))| {
+            let new = usaw::grad_gamma(&kernel, x, e, g);
+            if integrate {
+                *gamma += (*grad + new).dot(u) * (0.5 * dt);
+            } else {
+                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
+            }
+            *grad = new;
+        });
+}
+
+/// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall
+/// pressures.
 #[allow(clippy::too_many_arguments)]
 fn sweep<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -587,8 +903,10 @@ fn sweep<V: Vector, W: WallModel<V>>(
     acceleration: &mut [V],
     density_rate: &mut [f64],
     viscous_power: &mut [f64],
-) {
+) -> f64 {
+    let start = Instant::now();
     wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
+    let wall_seconds = start.elapsed().as_secs_f64();
     compute_rates(
         model,
         wall_model,
@@ -600,4 +918,5 @@ fn sweep<V: Vector, W: WallModel<V>>(
         density_rate,
         viscous_power,
     );
+    wall_seconds
 }

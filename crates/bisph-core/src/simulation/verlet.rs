@@ -17,6 +17,7 @@ impl<V: Vector> Simulation<V> {
     /// One explicit Verlet step of size `dt`.
     pub(super) fn verlet_step(&mut self, dt: f64) -> Result<(), SimError> {
         let half = 0.5 * dt;
+        let summation = self.summation();
         // 1. kick, bounce off walls, drift.
         {
             let f = &mut self.fluid;
@@ -40,15 +41,23 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.velocity.par_iter())
                 .for_each(|(r, &u)| *r += u * dt);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
-        for p in self.walls.pistons_mut() {
-            p.velocity += half * p.acceleration;
-            p.position += dt * p.velocity;
+        // Dynamic bodies: kick and drift like the fluid.
+        let mut body_velocity = self.walls.dynamic_velocities();
+        for (v, a) in body_velocity
+            .iter_mut()
+            .zip(self.walls.dynamic_accelerations())
+        {
+            *v += half * a;
         }
+        self.walls.set_dynamic_velocities(&body_velocity);
+        self.walls.drift_bodies(dt);
         self.wrap_positions();
         let power_before = self.wall_power;
         let viscous_before = self.viscous_power;
@@ -60,17 +69,27 @@ impl<V: Vector> Simulation<V> {
         self.walls.move_to(self.time);
         let interval = self.config.reorder_interval;
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
-        self.stage_state(half);
-        let piston_velocities: Vec<f64> = self.walls.pistons_mut().map(|p| p.velocity).collect();
-        for p in self.walls.pistons_mut() {
-            p.velocity += half * p.acceleration;
+        self.advance_gamma(dt);
+        if summation {
+            self.summation_densities(dt);
         }
+        self.stage_state(half);
+        let predicted: Vec<f64> = body_velocity
+            .iter()
+            .zip(self.walls.dynamic_accelerations())
+            .map(|(v, a)| v + half * a)
+            .collect();
+        self.walls.set_dynamic_velocities(&predicted);
         self.walls.set_velocities_at(self.time);
         self.evaluate_rates();
-        self.store_piston_accelerations();
-        for (p, v) in self.walls.pistons_mut().zip(piston_velocities) {
-            p.velocity = v + half * p.acceleration;
+        self.store_body_accelerations(true);
+        for (v, a) in body_velocity
+            .iter_mut()
+            .zip(self.walls.dynamic_accelerations())
+        {
+            *v += half * a;
         }
+        self.walls.set_dynamic_velocities(&body_velocity);
         self.walls.set_velocities_at(self.time);
         // 3. kick.
         {
@@ -79,10 +98,12 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .zip(f.acceleration.par_iter())
                 .for_each(|(u, &a)| *u += a * half);
-            f.density
-                .par_iter_mut()
-                .zip(f.density_rate.par_iter())
-                .for_each(|(rho, &drho)| *rho += drho * half);
+            if !summation {
+                f.density
+                    .par_iter_mut()
+                    .zip(f.density_rate.par_iter())
+                    .for_each(|(rho, &drho)| *rho += drho * half);
+            }
         }
         self.wall_work += half * (power_before + self.wall_power);
         self.viscous_dissipation += half * (viscous_before + self.viscous_power);

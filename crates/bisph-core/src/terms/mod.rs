@@ -17,8 +17,8 @@ use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
-use crate::walls::{BoundaryElements, WallModel};
-pub use density_diffusion::DensityDiffusion;
+use crate::walls::{BoundaryElements, ParticleView, WallModel};
+pub use density_diffusion::{DensityDiffusion, DiffusionForm};
 use rayon::prelude::*;
 pub use viscosity::Viscosity;
 
@@ -48,13 +48,18 @@ pub struct RateModel<V: Vector> {
     pub kernel: Wendland,
     /// Gravity `g`.
     pub gravity: V,
-    /// delta-SPH density diffusion.
+    /// Density diffusion (delta-SPH or paper 3's volume diffusion).
     pub diffusion: DensityDiffusion<V>,
     /// Laminar viscosity (off when `nu = 0`).
     pub viscosity: Viscosity,
     /// Uniform driving acceleration (e.g. the flux control of paper 3, section 5), added to
     /// every particle like gravity but booked apart in the energy.
     pub body_force: V,
+    /// The density power `k` of paper 3, eqs 37-38 (0: paper 1, eqs 10-11; or 1).
+    pub density_power: u8,
+    /// Density by summation (paper 3, eqs 13 and 84): the sweep's density rate is then the
+    /// diffusion term alone, which the integrator accumulates (see [`crate::simulation`]).
+    pub summation_density: bool,
 }
 
 /// Operators of particle `i` at the state `fluid`.
@@ -83,32 +88,46 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let diffuse = model.diffusion.scale != 0.0;
     let viscosity = model.viscosity;
     let viscid = viscosity.active();
+    let discrete_shepard = W::RENORMALISE && wall_model.needs_discrete_shepard();
+    let weighted = model.density_power != 0;
     fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
         let f = kernel.gradient_factor(r);
         let grad_w = r_ij * f;
         let volume_j = fluid.volume[j];
-        grad_p += pressure_gradient::pair(p_i, fluid.pressure[j], grad_w, volume_j);
-        div_u += velocity_divergence::pair(u_i, fluid.velocity[j], grad_w, volume_j);
+        if weighted {
+            let ratio = rho_i / fluid.density[j];
+            grad_p += pressure_gradient::pair_k(p_i, fluid.pressure[j], grad_w, volume_j, ratio);
+            div_u += velocity_divergence::pair_k(u_i, fluid.velocity[j], grad_w, volume_j, ratio);
+        } else {
+            grad_p += pressure_gradient::pair(p_i, fluid.pressure[j], grad_w, volume_j);
+            div_u += velocity_divergence::pair(u_i, fluid.velocity[j], grad_w, volume_j);
+        }
         if diffuse {
             diffusion += model
                 .diffusion
-                .pair(rho_i, fluid.density[j], r_ij, f, volume_j);
+                .pair(rho_i, fluid.density[j], r_ij, r, f, volume_j);
         }
         if viscid {
             viscous += viscosity.pair(u_i, fluid.velocity[j], rho_i, fluid.density[j], f, volume_j);
         }
-        if W::RENORMALISE {
+        if discrete_shepard {
             shepard += kernel.value(r) * volume_j;
         }
     });
-    let wall = wall_model.particle_terms(kernel, x_i, u_i, p_i, elements, wall_grid);
+    let view = ParticleView {
+        x: x_i,
+        u: u_i,
+        p: p_i,
+        rho: rho_i,
+    };
+    let wall = wall_model.particle_terms(kernel, &view, elements, wall_grid);
     let wall_viscous = if viscid {
         wall_model.wall_viscous(kernel, &viscosity, x_i, u_i, elements, wall_grid)
     } else {
         V::ZERO
     };
     let gamma = if W::RENORMALISE {
-        wall_model.renormalisation(kernel, x_i, shepard, elements, wall_grid)
+        wall_model.renormalisation(kernel, x_i, shepard, fluid.gamma[i], elements, wall_grid)
     } else {
         1.0
     };
@@ -124,7 +143,11 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
             velocity_divergence: div_u,
             wall_pressure_gradient: total_grad - grad_p,
             wall_velocity_divergence: total_div - div_u,
-            density_diffusion: diffusion,
+            density_diffusion: if W::RENORMALISE_DIFFUSION {
+                diffusion * scale
+            } else {
+                diffusion
+            },
             viscous,
             wall_viscous: total_viscous - viscous,
         };
@@ -184,8 +207,11 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;
-            *drho = -rho * (op.velocity_divergence + op.wall_velocity_divergence)
-                + op.density_diffusion;
+            *drho = if model.summation_density {
+                op.density_diffusion
+            } else {
+                -rho * (op.velocity_divergence + op.wall_velocity_divergence) + op.density_diffusion
+            };
             *dissipation = -fluid.mass[i] * fluid.velocity[i].dot(viscous);
         });
 }

@@ -8,7 +8,7 @@
 //! Then the fluid's power loss equals `sum_j f_j . U_j` for any particle state, and fixed walls
 //! exchange no power.
 
-use super::{BoundaryElements, WallModel, WallTerms};
+use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
@@ -36,12 +36,11 @@ impl<V: Vector> WallModel<V> for EnergyConservingWalls {
     fn particle_terms(
         &self,
         kernel: &Wendland,
-        x: V,
-        u: V,
-        p: f64,
+        a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V> {
+        let (x, u, p) = (a.x, a.u, a.p);
         let mut normal_sum = V::ZERO;
         let mut relative_flux = 0.0;
         grid.for_each_neighbour(x, &elements.centre, kernel.support, |j, _, r| {

@@ -250,31 +250,41 @@ pub fn gamma<V: Vector>(
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
 ) -> f64 {
-    let mut x = x;
     let eps = 1e-12 * kernel.h;
     let radius = kernel.support + elements.max_reach;
-    let x0 = x;
-    grid.for_each_candidate_within_shifted(x0, radius, |j, shift| {
-        let r = elements.centre[j] + shift - x0;
-        let rn = r.dot(elements.normal[j]);
-        if rn.abs() < eps
-            && (r - elements.normal[j] * rn).length() <= elements.reach[j] * (1.0 + 1e-12)
-        {
-            x -= elements.normal[j] * eps;
-        }
-    });
-    let mut gamma = 1.0;
-    grid.for_each_candidate_within_shifted(x, radius, |j, shift| {
-        // The element's corners are stored at its own image: move the point instead.
-        gamma += V::wall_gamma_contribution(
-            kernel,
-            x - shift,
-            elements.current_corners(j),
-            elements.normal[j],
-            elements.area[j],
-        );
-    });
-    gamma
+    // One walk sums the contributions and finds the elements the point lies on; only such a
+    // point (rare) is moved and summed again.
+    let sum_at = |x: V, shift: &mut V| {
+        let mut gamma = 1.0;
+        // Periodic axes: the grid hands each element's image shift; the element's corners are
+        // stored at its own image, so the point is moved instead (minimum image).
+        grid.for_each_candidate_within_shifted(x, radius, |j, image| {
+            let r = elements.centre[j] + image - x;
+            let reach = elements.reach[j];
+            if r.length_squared() > (kernel.support + reach) * (kernel.support + reach) {
+                return;
+            }
+            let rn = r.dot(elements.normal[j]);
+            if rn.abs() < eps && (r - elements.normal[j] * rn).length() <= reach * (1.0 + 1e-12) {
+                *shift -= elements.normal[j] * eps;
+            }
+            gamma += V::wall_gamma_contribution(
+                kernel,
+                x - image,
+                elements.current_corners(j),
+                elements.normal[j],
+                elements.area[j],
+            );
+        });
+        gamma
+    };
+    let mut shift = V::ZERO;
+    let gamma = sum_at(x, &mut shift);
+    if shift == V::ZERO {
+        return gamma;
+    }
+    let mut unused = V::ZERO;
+    sum_at(x + shift, &mut unused)
 }
 
 #[cfg(test)]

@@ -8,13 +8,15 @@ pub mod bounce;
 pub mod energy_bi;
 pub mod geometric_shepard;
 pub mod shepard_bi;
+pub mod usaw;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
 use crate::terms::Viscosity;
-pub use bodies::{Body, Kinematics, Motion, Piston, PrescribedMotion};
+pub use bodies::{Body, Coupling, FreeBody, Kinematics, Motion, Piston, PrescribedMotion};
+use glam::DVec3;
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the
 /// fluid, area (length in 2-D), velocity and owning body.
@@ -116,6 +118,8 @@ pub struct Walls<V: Vector> {
     /// Periodic axes: element centres are kept in the primary period (their corners move with
     /// them), so an element straddling the period is seen from both sides through the grid.
     pub periodicity: Periodicity<V>,
+    /// Vertex particles of the semi-analytical walls (empty for the other models).
+    pub vertices: usaw::Vertices<V>,
 }
 
 /// Wall elements aligned with a piston's axis that stretch affinely between a fixed anchor
@@ -144,6 +148,7 @@ impl<V: Vector> Walls<V> {
             placed_at: 0.0,
             stretch: Vec::new(),
             periodicity: Periodicity::none(),
+            vertices: usaw::Vertices::default(),
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
@@ -255,18 +260,112 @@ impl<V: Vector> Walls<V> {
         }
     }
 
-    /// Acceleration of every piston along its axis from the current wall pressures,
-    /// `(F_fluid . axis - F_out) / m` (zero for other bodies), in body order.
-    pub fn piston_accelerations(&self) -> Vec<f64> {
+    /// Generalised accelerations of every dynamic body (pistons, free bodies), in body order
+    /// and the layout of [`Motion::accelerations`], from the current wall pressures and the
+    /// bodies' current (midpoint) velocities. A piston: `(F_fluid . axis - F_out) / m`;
+    /// a free body: [`FreeBody::accelerations`]. Bodies with `iterated == false` and
+    /// `all == false` keep their stored accelerations (staggered coupling).
+    pub fn body_accelerations(&self, all: bool) -> Vec<f64> {
         let loads = self.body_loads(self.placed_at);
-        self.bodies
-            .iter()
-            .zip(loads)
-            .map(|(b, (force, _))| match b.motion {
-                Motion::Piston(p) => (force.dot(p.axis) - p.outside_force) / p.mass,
-                _ => 0.0,
-            })
-            .collect()
+        let mut out = Vec::new();
+        for (b, (force, torque)) in self.bodies.iter().zip(loads) {
+            if !all && !b.motion.iterated() {
+                b.motion.accelerations(&mut out);
+                continue;
+            }
+            match b.motion {
+                Motion::Piston(p) => out.push((force.dot(p.axis) - p.outside_force) / p.mass),
+                Motion::Free(free) => {
+                    let f = DVec3::from_array(force.to_xyz());
+                    let (a, alpha) = free.accelerations(f, bodies::angular_to_3d::<V>(torque));
+                    out.extend(a.to_array());
+                    out.extend(alpha.to_array());
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// Staggered coupling: bodies that do not iterate with the fluid take the accelerations of
+    /// the current wall loads (used through the next step); the others keep theirs.
+    pub fn update_staggered(&mut self) {
+        if self.bodies.iter().all(|b| b.motion.iterated()) {
+            return;
+        }
+        let fresh = self.body_accelerations(true);
+        let mut k = 0;
+        for b in &mut self.bodies {
+            let mut n = Vec::new();
+            b.motion.accelerations(&mut n);
+            if !b.motion.iterated() {
+                b.motion.set_accelerations(&fresh[k..k + n.len()]);
+            }
+            k += n.len();
+        }
+    }
+
+    /// Generalised velocities of every dynamic body (see [`Motion::velocities`]).
+    pub fn dynamic_velocities(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.velocities(&mut out);
+        }
+        out
+    }
+
+    /// Generalised accelerations of every dynamic body, as stored.
+    pub fn dynamic_accelerations(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.accelerations(&mut out);
+        }
+        out
+    }
+
+    /// Inertias of the generalised coordinates (residue weights).
+    pub fn dynamic_inertias(&self) -> Vec<f64> {
+        let mut out = Vec::new();
+        for b in &self.bodies {
+            b.motion.inertias(&mut out);
+        }
+        out
+    }
+
+    /// Sets the generalised velocities of every dynamic body.
+    pub fn set_dynamic_velocities(&mut self, values: &[f64]) {
+        let mut k = 0;
+        for b in &mut self.bodies {
+            k += b.motion.set_velocities(&values[k..]);
+        }
+    }
+
+    /// Sets the generalised accelerations of every dynamic body.
+    pub fn set_dynamic_accelerations(&mut self, values: &[f64]) {
+        let mut k = 0;
+        for b in &mut self.bodies {
+            k += b.motion.set_accelerations(&values[k..]);
+        }
+    }
+
+    /// Moves every dynamic body through `dt` with the velocities it holds (elements are
+    /// placed by the next [`Walls::move_to`]).
+    pub fn drift_bodies(&mut self, dt: f64) {
+        for b in &mut self.bodies {
+            b.motion.drift(dt);
+        }
+    }
+
+    /// Kinetic and gravity-potential energy of the free bodies.
+    pub fn body_energy(&self) -> (f64, f64) {
+        let mut e = (0.0, 0.0);
+        for b in &self.bodies {
+            if let Motion::Free(f) = &b.motion {
+                e.0 += f.kinetic_energy();
+                e.1 += f.potential_energy();
+            }
+        }
+        e
     }
 
     /// Mutable access to the pistons, in body order.
@@ -296,6 +395,29 @@ impl<V: Vector> Walls<V> {
         loads
     }
 
+    /// Number of points (fluid particles) that lie behind the walls: their nearest element
+    /// within `radius` (by distance to the element's plane patch, approximated by the centre
+    /// distance) has them on its wall side, `(x - c_j) . n_j > 0`. A diagnostic of particles
+    /// that got into a body or through a wall.
+    pub fn count_behind(&self, points: &[V], radius: f64) -> usize {
+        use rayon::prelude::*;
+        let e = &self.elements;
+        points
+            .par_iter()
+            .filter(|&&x| {
+                let mut best = (f64::INFINITY, 0.0);
+                self.grid
+                    .for_each_candidate_within(x, radius + e.max_reach, |j| {
+                        let d = (e.centre[j] - x).length_squared();
+                        if d < best.0 {
+                            best = (d, (x - e.centre[j]).dot(e.normal[j]));
+                        }
+                    });
+                best.0.is_finite() && best.1 > 0.0
+            })
+            .count()
+    }
+
     /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`.
     pub fn power(&self) -> f64 {
         let e = &self.elements;
@@ -314,12 +436,28 @@ pub struct WallTerms<V> {
     pub velocity_divergence: f64,
 }
 
+/// The state of one particle as a wall model sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleView<V> {
+    /// Position.
+    pub x: V,
+    /// Velocity.
+    pub u: V,
+    /// Pressure.
+    pub p: f64,
+    /// Density.
+    pub rho: f64,
+}
+
 /// A wall model: supplies the wall part of the operators for a fluid particle and the wall
 /// pressure on each element. Physical terms ask it; they never test which model is active.
 pub trait WallModel<V: Vector>: Sync {
     /// `true` when the whole operator (fluid and wall sums) is divided by the particle's
     /// discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 1, eqs 24-25).
     const RENORMALISE: bool;
+
+    /// `true` when the density diffusion is divided by `gamma_i` as well (paper 3, eq 54).
+    const RENORMALISE_DIFFUSION: bool = false;
 
     /// Refreshes `elements.pressure`, the wall pressure used for forces and, where the model
     /// needs it, in the wall terms. Called before every rate sweep.
@@ -331,13 +469,21 @@ pub trait WallModel<V: Vector>: Sync {
         fluid_grid: &CellGrid<V>,
     );
 
+    /// Whether [`WallModel::renormalisation`] reads the discrete sum `sum_j W_ij V_j`, so the
+    /// fluid sweep must accumulate it (one extra kernel value per pair).
+    fn needs_discrete_shepard(&self) -> bool {
+        Self::RENORMALISE
+    }
+
     /// The Shepard factor `gamma_i` that divides the operators of a particle at `x` when
-    /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid.
+    /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid,
+    /// `state_gamma` the particle's integrated gamma (paper 3, eq 4).
     fn renormalisation(
         &self,
         _kernel: &Wendland,
         _x: V,
         discrete: f64,
+        _state_gamma: f64,
         _elements: &BoundaryElements<V>,
         _grid: &CellGrid<V>,
     ) -> f64 {
@@ -370,13 +516,11 @@ pub trait WallModel<V: Vector>: Sync {
         a
     }
 
-    /// Wall sums for a fluid particle at `x` with velocity `u` and pressure `p`.
+    /// Wall sums for the fluid particle `a`.
     fn particle_terms(
         &self,
         kernel: &Wendland,
-        x: V,
-        u: V,
-        p: f64,
+        a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V>;

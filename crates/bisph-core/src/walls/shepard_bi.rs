@@ -9,7 +9,7 @@
 //! `p_k = sum_j (p_j + rho_j g . (r_k - r_j)) W_kj V_j / sum_j W_kj V_j`.
 //! These operators are not skew-adjoint: energy is not conserved (paper 1, section 4).
 
-use super::{BoundaryElements, WallModel, WallTerms};
+use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
@@ -24,6 +24,9 @@ pub enum ShepardKind {
     Discrete,
     /// From the wall elements alone (paper 2; [`super::geometric_shepard`]).
     Geometric,
+    /// Integrated in time, `dgamma/dt = v_rel . grad gamma` (paper 3, eq 4), from the
+    /// geometric value at time zero ([`super::usaw`]).
+    Integrated,
 }
 
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
@@ -72,17 +75,23 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
             });
     }
 
+    fn needs_discrete_shepard(&self) -> bool {
+        self.shepard == ShepardKind::Discrete
+    }
+
     fn renormalisation(
         &self,
         kernel: &Wendland,
         x: V,
         discrete: f64,
+        state_gamma: f64,
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> f64 {
         match self.shepard {
             ShepardKind::Discrete => discrete,
             ShepardKind::Geometric => super::geometric_shepard::gamma(kernel, x, elements, grid),
+            ShepardKind::Integrated => state_gamma,
         }
     }
 
@@ -90,12 +99,11 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
     fn particle_terms(
         &self,
         kernel: &Wendland,
-        x: V,
-        u: V,
-        p: f64,
+        a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V> {
+        let (x, u, p) = (a.x, a.u, a.p);
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
         grid.for_each_neighbour(x, &elements.centre, kernel.support, |k, _, r| {

@@ -1,0 +1,953 @@
+//! Checkpoints: the complete state of a run in one binary file, so that `bisph run --resume`
+//! continues bit for bit where the run stopped.
+//!
+//! Layout (little endian):
+//! ```text
+//! magic        8 bytes  "BISPHCKP"
+//! format       u32      FORMAT_VERSION
+//! version      u32 len + UTF-8   the bisph version that wrote it
+//! dim          u32      2 or 3
+//! payload      u64 len + bytes   (see `encode_payload`)
+//! checksum     u64      FNV-1a 64 of every byte before it
+//! ```
+//! A file whose magic, format, version, dimension, checksum or lengths do not match is refused
+//! as a whole before anything is used. Every length read is checked against the bytes left, so
+//! a damaged or hostile file cannot make the reader allocate more than the file's own size.
+//!
+//! What is saved: the fluid arrays in their current memory order (the run reorders particles
+//! by cell, and sums run in memory order, so the order is part of the state), the wall elements'
+//! moving geometry, velocities and pressures, the pistons, the integrator history (rates of the
+//! last evaluation, which the midpoint scheme uses as its first guess and Verlet as its first
+//! kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
+//! controller's memory and driving force, and the run loop's counters (next output times, frames,
+//! CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
+//! configuration) are rebuilt from the case text stored in the checkpoint.
+
+use crate::output::OutputError;
+use bisph_core::forcing::FluxHistory;
+use bisph_core::particles::Fluid;
+use bisph_core::walls::Motion;
+use bisph_core::{Simulation, Vector};
+use std::path::{Path, PathBuf};
+
+/// File magic.
+pub const MAGIC: &[u8; 8] = b"BISPHCKP";
+/// Version of the binary layout.
+pub const FORMAT_VERSION: u32 = 3;
+/// The bisph version written into (and required of) every checkpoint.
+pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
+/// File name of the checkpoint in an output directory.
+pub const FILE_NAME: &str = "checkpoint.bin";
+
+/// Why a checkpoint could not be read or used.
+#[derive(Debug)]
+pub enum CheckpointError {
+    /// The file could not be read.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file is not a bisph checkpoint, or one of another format or bisph version.
+    Foreign {
+        /// The file.
+        path: PathBuf,
+        /// What did not match.
+        reason: String,
+    },
+    /// The file is a bisph checkpoint but is damaged (checksum, lengths).
+    Damaged {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The checkpoint does not fit the case it names (particle or element counts, bodies).
+    Mismatch {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit.
+        reason: String,
+    },
+}
+
+impl std::fmt::Display for CheckpointError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointError::Io { path, source } => {
+                write!(f, "cannot read checkpoint {}: {source}", path.display())
+            }
+            CheckpointError::Foreign { path, reason } => write!(
+                f,
+                "refusing checkpoint {}: not usable by bisph {BISPH_VERSION}: {reason}",
+                path.display()
+            ),
+            CheckpointError::Damaged { path, reason } => write!(
+                f,
+                "refusing checkpoint {}: the file is damaged: {reason}",
+                path.display()
+            ),
+            CheckpointError::Mismatch { path, reason } => write!(
+                f,
+                "refusing checkpoint {}: it does not fit its case: {reason}",
+                path.display()
+            ),
+        }
+    }
+}
+
+impl std::error::Error for CheckpointError {}
+
+/// FNV-1a, 64 bits.
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The simulation's dynamic state (what a step changes), in memory order.
+#[derive(Clone, Debug, Default)]
+pub struct SimState<V: Vector> {
+    /// Time.
+    pub time: f64,
+    /// Steps taken.
+    pub step: u64,
+    /// Last step size.
+    pub last_dt: f64,
+    /// Cumulative wall work.
+    pub wall_work: f64,
+    /// Wall power at the last rate evaluation.
+    pub wall_power: f64,
+    /// Cumulative viscous dissipation.
+    pub viscous_dissipation: f64,
+    /// Viscous dissipation rate at the last rate evaluation.
+    pub viscous_power: f64,
+    /// Cumulative work of the driving force.
+    pub forcing_work: f64,
+    /// Current driving acceleration of the flux control.
+    pub body_force: V,
+    /// The flux controller's memory.
+    pub flux_history: FluxHistory,
+    /// Midpoint iterations of the last step.
+    pub last_iterations: u32,
+    /// Midpoint residue of the last step.
+    pub last_residue: f64,
+    /// Time at which the walls were last placed.
+    pub placed_at: f64,
+    /// The fluid, all arrays (ids, rates included).
+    pub fluid: Fluid<V>,
+    /// Element centres.
+    pub centre: Vec<V>,
+    /// Element normals.
+    pub normal: Vec<V>,
+    /// Element areas.
+    pub area: Vec<f64>,
+    /// Element velocities.
+    pub velocity: Vec<V>,
+    /// Element reaches.
+    pub reach: Vec<f64>,
+    /// Largest reach.
+    pub max_reach: f64,
+    /// Wall pressures.
+    pub pressure: Vec<f64>,
+    /// Current element corners.
+    pub corners: Vec<V>,
+    /// Pistons in body order: (body index, position, velocity, acceleration).
+    pub pistons: Vec<(u32, f64, f64, f64)>,
+}
+
+impl<V: Vector> SimState<V> {
+    /// Copies the state of `sim` into `self`, reusing its buffers (no allocation once warm).
+    pub fn capture(&mut self, sim: &Simulation<V>) {
+        self.time = sim.time;
+        self.step = sim.step;
+        self.last_dt = sim.last_dt;
+        self.wall_work = sim.wall_work;
+        self.wall_power = sim.wall_power;
+        self.viscous_dissipation = sim.viscous_dissipation;
+        self.viscous_power = sim.viscous_power;
+        self.forcing_work = sim.forcing_work;
+        self.body_force = sim.body_force;
+        self.flux_history = sim.flux_history;
+        self.last_iterations = sim.last_iterations;
+        self.last_residue = sim.last_residue;
+        self.placed_at = sim.walls.placed_at;
+        let (d, s) = (&mut self.fluid, &sim.fluid);
+        d.id.clone_from(&s.id);
+        d.position.clone_from(&s.position);
+        d.velocity.clone_from(&s.velocity);
+        d.density.clone_from(&s.density);
+        d.mass.clone_from(&s.mass);
+        d.pressure.clone_from(&s.pressure);
+        d.acceleration.clone_from(&s.acceleration);
+        d.density_rate.clone_from(&s.density_rate);
+        d.gamma.clone_from(&s.gamma);
+        d.grad_gamma.clone_from(&s.grad_gamma);
+        d.density_offset.clone_from(&s.density_offset);
+        let e = &sim.walls.elements;
+        self.centre.clone_from(&e.centre);
+        self.normal.clone_from(&e.normal);
+        self.area.clone_from(&e.area);
+        self.velocity.clone_from(&e.velocity);
+        self.reach.clone_from(&e.reach);
+        self.max_reach = e.max_reach;
+        self.pressure.clone_from(&e.pressure);
+        self.corners.clone_from(&e.corners);
+        self.pistons.clear();
+        for (b, body) in sim.walls.bodies.iter().enumerate() {
+            if let Motion::Piston(p) = body.motion {
+                self.pistons
+                    .push((b as u32, p.position, p.velocity, p.acceleration));
+            }
+        }
+    }
+
+    /// Puts this state into `sim` (built from the same case) and rebuilds its cell grids.
+    /// Fails, changing nothing, when the counts do not fit.
+    pub fn restore(&self, sim: &mut Simulation<V>) -> Result<(), String> {
+        let n = self.fluid.id.len();
+        let f = &self.fluid;
+        if [
+            f.position.len(),
+            f.velocity.len(),
+            f.density.len(),
+            f.mass.len(),
+            f.pressure.len(),
+            f.acceleration.len(),
+            f.density_rate.len(),
+            f.gamma.len(),
+            f.grad_gamma.len(),
+            f.density_offset.len(),
+        ]
+        .iter()
+        .any(|&k| k != n)
+        {
+            return Err("fluid arrays of different lengths".into());
+        }
+        if n != sim.fluid.len() {
+            return Err(format!(
+                "{n} fluid particles saved, the case builds {}",
+                sim.fluid.len()
+            ));
+        }
+        let mut seen = vec![false; n];
+        for &id in &f.id {
+            match seen.get_mut(id as usize) {
+                Some(s) if !*s => *s = true,
+                _ => return Err(format!("particle id {id} repeated or out of range")),
+            }
+        }
+        let e = &sim.walls.elements;
+        let m = e.len();
+        if [
+            self.centre.len(),
+            self.normal.len(),
+            self.area.len(),
+            self.velocity.len(),
+            self.reach.len(),
+            self.pressure.len(),
+        ]
+        .iter()
+        .any(|&k| k != m)
+            || self.corners.len() != e.corners.len()
+        {
+            return Err(format!(
+                "{} boundary elements ({} corners) saved, the case builds {m} ({})",
+                self.centre.len(),
+                self.corners.len(),
+                e.corners.len()
+            ));
+        }
+        let finite_v = |v: &[V]| v.iter().all(|x| x.is_finite());
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !(finite_v(&f.velocity)
+            && finite_v(&f.acceleration)
+            && finite(&f.mass)
+            && finite(&f.pressure)
+            && finite(&f.density_rate)
+            && finite(&f.gamma)
+            && finite_v(&f.grad_gamma)
+            && finite(&f.density_offset)
+            && f.density.iter().all(|&r| r.is_finite() && r > 0.0))
+        {
+            return Err("non-finite fluid values".into());
+        }
+        let (lo, hi) = (sim.config.domain_min, sim.config.domain_max);
+        if let Some(p) = f
+            .position
+            .iter()
+            .find(|r| (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k))))
+        {
+            return Err(format!(
+                "a particle outside the domain, at {:?}",
+                p.to_xyz()
+            ));
+        }
+        if !(finite_v(&self.centre)
+            && finite_v(&self.normal)
+            && finite_v(&self.velocity)
+            && finite_v(&self.corners)
+            && finite(&self.area)
+            && finite(&self.reach)
+            && finite(&self.pressure)
+            && self.max_reach.is_finite())
+        {
+            return Err("non-finite wall element values".into());
+        }
+        // The element grid may not need far more cells than the case's own walls do.
+        let cells = |points: &[V]| -> f64 {
+            let Some(&first) = points.first() else {
+                return 0.0;
+            };
+            let (mut a, mut b) = (first, first);
+            for &p in points {
+                a = a.min_by_component(p);
+                b = b.max_by_component(p);
+            }
+            let cell = sim.walls.grid.cell_size();
+            (0..V::DIM)
+                .map(|k| (b.get(k) - a.get(k)) / cell + 1.0)
+                .product()
+        };
+        if cells(&self.centre) > 64.0 * cells(&e.centre) + 1e6 {
+            return Err("wall elements spread far beyond the case's walls".into());
+        }
+        if self
+            .pistons
+            .iter()
+            .any(|p| !(p.1.is_finite() && p.2.is_finite() && p.3.is_finite()))
+            || ![
+                self.time,
+                self.last_dt,
+                self.wall_work,
+                self.wall_power,
+                self.viscous_dissipation,
+                self.viscous_power,
+                self.forcing_work,
+                self.flux_history.last,
+                self.flux_history.before_last,
+                self.flux_history.force,
+                self.last_residue,
+                self.placed_at,
+            ]
+            .iter()
+            .all(|x| x.is_finite())
+            || self.time < 0.0
+        {
+            return Err("non-finite or negative scalars".into());
+        }
+        let pistons: Vec<u32> = sim
+            .walls
+            .bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| matches!(b.motion, Motion::Piston(_)))
+            .map(|(k, _)| k as u32)
+            .collect();
+        if pistons != self.pistons.iter().map(|p| p.0).collect::<Vec<_>>() {
+            return Err("the pistons saved are not the case's pistons".into());
+        }
+        sim.time = self.time;
+        sim.step = self.step;
+        sim.last_dt = self.last_dt;
+        sim.wall_work = self.wall_work;
+        sim.wall_power = self.wall_power;
+        sim.viscous_dissipation = self.viscous_dissipation;
+        sim.viscous_power = self.viscous_power;
+        sim.forcing_work = self.forcing_work;
+        sim.body_force = self.body_force;
+        sim.flux_history = self.flux_history;
+        sim.last_iterations = self.last_iterations;
+        sim.last_residue = self.last_residue;
+        sim.walls.placed_at = self.placed_at;
+        let d = &mut sim.fluid;
+        d.id.clone_from(&f.id);
+        d.position.clone_from(&f.position);
+        d.velocity.clone_from(&f.velocity);
+        d.density.clone_from(&f.density);
+        d.mass.clone_from(&f.mass);
+        d.pressure.clone_from(&f.pressure);
+        d.acceleration.clone_from(&f.acceleration);
+        d.density_rate.clone_from(&f.density_rate);
+        d.gamma.clone_from(&f.gamma);
+        d.grad_gamma.clone_from(&f.grad_gamma);
+        d.density_offset.clone_from(&f.density_offset);
+        let e = &mut sim.walls.elements;
+        e.centre.clone_from(&self.centre);
+        e.normal.clone_from(&self.normal);
+        e.area.clone_from(&self.area);
+        e.velocity.clone_from(&self.velocity);
+        e.reach.clone_from(&self.reach);
+        e.max_reach = self.max_reach;
+        e.pressure.clone_from(&self.pressure);
+        e.corners.clone_from(&self.corners);
+        for &(b, position, velocity, acceleration) in &self.pistons {
+            if let Motion::Piston(p) = &mut sim.walls.bodies[b as usize].motion {
+                p.position = position;
+                p.velocity = velocity;
+                p.acceleration = acceleration;
+            }
+        }
+        sim.fluid_grid.rebuild(&sim.fluid.position);
+        sim.walls.grid.rebuild(&sim.walls.elements.centre);
+        Ok(())
+    }
+}
+
+/// Columns of `energy.csv` (and of the energy history a checkpoint keeps).
+pub const ENERGY_COLUMNS: usize = 8;
+
+/// Exactly one vector, from a list.
+fn single<V: Vector>(v: Vec<V>) -> Result<V, String> {
+    match v[..] {
+        [x] => Ok(x),
+        _ => Err(format!("expected one vector, found {}", v.len())),
+    }
+}
+
+/// Number of CSV series whose lengths a checkpoint keeps.
+pub const SERIES: usize = 6;
+/// Their file names, in the order of [`RunCounters::csv_lengths`].
+pub const SERIES_FILES: [&str; SERIES] = [
+    "energy.csv",
+    "forces.csv",
+    "probes.csv",
+    "bodies.csv",
+    "midpoint.csv",
+    "flux.csv",
+];
+
+/// The run loop's own state (outputs and running statistics).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunCounters {
+    /// Time of the next series row.
+    pub next_series: f64,
+    /// Time of the next VTK frame.
+    pub next_frame: f64,
+    /// Times of the frames written (their index is the frame number).
+    pub frame_times: Vec<f64>,
+    /// Initial total energy.
+    pub e0_total: f64,
+    /// Energy scale.
+    pub scale: f64,
+    /// Largest relative drift so far.
+    pub max_drift: f64,
+    /// Largest speed so far.
+    pub max_speed: f64,
+    /// Sum of midpoint iterations.
+    pub iterations_sum: u64,
+    /// Most midpoint iterations in a step.
+    pub iterations_max: u32,
+    /// Largest residue.
+    pub residue_max: f64,
+    /// Unconverged steps.
+    pub unconverged: u64,
+    /// Bytes of each series file (see [`SERIES_FILES`]; 0 when absent).
+    pub csv_lengths: [u64; SERIES],
+    /// Wall seconds of the time loop before this checkpoint.
+    pub wall_seconds: f64,
+    /// Step size the run started with (for the time-step collapse watch).
+    pub dt0: f64,
+}
+
+impl RunCounters {
+    /// Checks that the counters fit a run at time `t` with these output intervals (so that no
+    /// loop over output times can run away on a hostile file).
+    pub fn check(&self, t: f64, series_interval: f64, vtk_interval: f64) -> Result<(), String> {
+        let near = |next: f64, interval: f64| {
+            next.is_finite() && next >= t - interval && next <= t + 2.0 * interval
+        };
+        if !near(self.next_series, series_interval) {
+            return Err(format!(
+                "next series time {} does not fit t = {t}",
+                self.next_series
+            ));
+        }
+        if vtk_interval > 0.0 && !near(self.next_frame, vtk_interval) {
+            return Err(format!(
+                "next frame time {} does not fit t = {t}",
+                self.next_frame
+            ));
+        }
+        if self.frame_times.iter().any(|x| !x.is_finite()) || !self.dt0.is_finite() {
+            return Err("non-finite frame times or first step".into());
+        }
+        Ok(())
+    }
+}
+
+/// A whole checkpoint.
+#[derive(Clone, Debug, Default)]
+pub struct Checkpoint<V: Vector> {
+    /// Where the case came from (its folder resolves relative file names).
+    pub case_source: String,
+    /// The case text after overrides.
+    pub case_text: String,
+    /// The simulation state.
+    pub sim: SimState<V>,
+    /// The run loop's counters.
+    pub run: RunCounters,
+    /// Rows of `energy.csv` so far (for the plots).
+    pub history: Vec<[f64; ENERGY_COLUMNS]>,
+    /// Rows of `probes.csv` so far (for the plots).
+    pub probe_history: Vec<Vec<f64>>,
+}
+
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_bits().to_le_bytes());
+    }
+    fn str(&mut self, s: &str) {
+        self.u64(s.len() as u64);
+        self.0.extend_from_slice(s.as_bytes());
+    }
+    fn f64s(&mut self, v: &[f64]) {
+        self.u64(v.len() as u64);
+        for &x in v {
+            self.f64(x);
+        }
+    }
+    fn u32s(&mut self, v: &[u32]) {
+        self.u64(v.len() as u64);
+        for &x in v {
+            self.u32(x);
+        }
+    }
+    fn vectors<V: Vector>(&mut self, v: &[V]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            for k in 0..V::DIM {
+                self.f64(x.get(k));
+            }
+        }
+    }
+}
+
+/// Bounds-checked reader: every length is checked against the bytes left before allocating.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+        if self.bytes.len() - self.at < n {
+            return Err(format!(
+                "truncated: {n} bytes wanted at offset {}, {} left",
+                self.at,
+                self.bytes.len() - self.at
+            ));
+        }
+        let s = &self.bytes[self.at..self.at + n];
+        self.at += n;
+        Ok(s)
+    }
+    fn u32(&mut self) -> Result<u32, String> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+    fn u64(&mut self) -> Result<u64, String> {
+        let b = self.take(8)?;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(b);
+        Ok(u64::from_le_bytes(a))
+    }
+    fn f64(&mut self) -> Result<f64, String> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+    /// A count of items of `size` bytes each, checked against the bytes left.
+    fn len(&mut self, size: usize) -> Result<usize, String> {
+        let n = self.u64()?;
+        let left = (self.bytes.len() - self.at) as u64;
+        if size > 0 && n > left / size as u64 {
+            return Err(format!(
+                "a list of {n} entries of {size} bytes at offset {} exceeds the {left} bytes left",
+                self.at
+            ));
+        }
+        Ok(n as usize)
+    }
+    fn str(&mut self) -> Result<String, String> {
+        let n = self.len(1)?;
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| "a text is not UTF-8".to_string())
+    }
+    fn f64s(&mut self) -> Result<Vec<f64>, String> {
+        let n = self.len(8)?;
+        (0..n).map(|_| self.f64()).collect()
+    }
+    fn u32s(&mut self) -> Result<Vec<u32>, String> {
+        let n = self.len(4)?;
+        (0..n).map(|_| self.u32()).collect()
+    }
+    fn vectors<V: Vector>(&mut self) -> Result<Vec<V>, String> {
+        let n = self.len(8 * V::DIM)?;
+        let mut out = Vec::with_capacity(n);
+        for _ in 0..n {
+            let mut v = V::ZERO;
+            for k in 0..V::DIM {
+                v.set(k, self.f64()?);
+            }
+            out.push(v);
+        }
+        Ok(out)
+    }
+}
+
+fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
+    let mut w = Writer(Vec::new());
+    w.str(&c.case_source);
+    w.str(&c.case_text);
+    let s = &c.sim;
+    w.f64(s.time);
+    w.u64(s.step);
+    w.f64(s.last_dt);
+    w.f64(s.wall_work);
+    w.f64(s.wall_power);
+    w.f64(s.viscous_dissipation);
+    w.f64(s.viscous_power);
+    w.f64(s.forcing_work);
+    w.vectors(&[s.body_force]);
+    w.f64(s.flux_history.last);
+    w.f64(s.flux_history.before_last);
+    w.f64(s.flux_history.force);
+    w.u32(s.last_iterations);
+    w.f64(s.last_residue);
+    w.f64(s.placed_at);
+    let f = &s.fluid;
+    w.u32s(&f.id);
+    w.vectors(&f.position);
+    w.vectors(&f.velocity);
+    w.f64s(&f.density);
+    w.f64s(&f.mass);
+    w.f64s(&f.pressure);
+    w.vectors(&f.acceleration);
+    w.f64s(&f.density_rate);
+    w.f64s(&f.gamma);
+    w.vectors(&f.grad_gamma);
+    w.f64s(&f.density_offset);
+    w.vectors(&s.centre);
+    w.vectors(&s.normal);
+    w.f64s(&s.area);
+    w.vectors(&s.velocity);
+    w.f64s(&s.reach);
+    w.f64(s.max_reach);
+    w.f64s(&s.pressure);
+    w.vectors(&s.corners);
+    w.u64(s.pistons.len() as u64);
+    for &(b, x, v, a) in &s.pistons {
+        w.u32(b);
+        w.f64(x);
+        w.f64(v);
+        w.f64(a);
+    }
+    let r = &c.run;
+    w.f64(r.next_series);
+    w.f64(r.next_frame);
+    w.f64s(&r.frame_times);
+    w.f64(r.e0_total);
+    w.f64(r.scale);
+    w.f64(r.max_drift);
+    w.f64(r.max_speed);
+    w.u64(r.iterations_sum);
+    w.u32(r.iterations_max);
+    w.f64(r.residue_max);
+    w.u64(r.unconverged);
+    for &l in &r.csv_lengths {
+        w.u64(l);
+    }
+    w.f64(r.wall_seconds);
+    w.f64(r.dt0);
+    w.u64(c.history.len() as u64);
+    for row in &c.history {
+        for &x in row {
+            w.f64(x);
+        }
+    }
+    w.u64(c.probe_history.len() as u64);
+    for row in &c.probe_history {
+        w.f64s(row);
+    }
+    w.0
+}
+
+fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
+    let mut r = Reader { bytes, at: 0 };
+    let case_source = r.str()?;
+    let case_text = r.str()?;
+    let mut s = SimState::<V> {
+        time: r.f64()?,
+        step: r.u64()?,
+        last_dt: r.f64()?,
+        wall_work: r.f64()?,
+        wall_power: r.f64()?,
+        viscous_dissipation: r.f64()?,
+        viscous_power: r.f64()?,
+        forcing_work: r.f64()?,
+        body_force: single(r.vectors()?)?,
+        flux_history: FluxHistory {
+            last: r.f64()?,
+            before_last: r.f64()?,
+            force: r.f64()?,
+        },
+        last_iterations: r.u32()?,
+        last_residue: r.f64()?,
+        placed_at: r.f64()?,
+        ..SimState::default()
+    };
+    s.fluid = Fluid {
+        id: r.u32s()?,
+        position: r.vectors()?,
+        velocity: r.vectors()?,
+        density: r.f64s()?,
+        mass: r.f64s()?,
+        pressure: r.f64s()?,
+        acceleration: r.vectors()?,
+        density_rate: r.f64s()?,
+        gamma: r.f64s()?,
+        grad_gamma: r.vectors()?,
+        density_offset: r.f64s()?,
+    };
+    s.centre = r.vectors()?;
+    s.normal = r.vectors()?;
+    s.area = r.f64s()?;
+    s.velocity = r.vectors()?;
+    s.reach = r.f64s()?;
+    s.max_reach = r.f64()?;
+    s.pressure = r.f64s()?;
+    s.corners = r.vectors()?;
+    let n = r.len(28)?;
+    for _ in 0..n {
+        s.pistons.push((r.u32()?, r.f64()?, r.f64()?, r.f64()?));
+    }
+    let mut run = RunCounters {
+        next_series: r.f64()?,
+        next_frame: r.f64()?,
+        frame_times: r.f64s()?,
+        e0_total: r.f64()?,
+        scale: r.f64()?,
+        max_drift: r.f64()?,
+        max_speed: r.f64()?,
+        iterations_sum: r.u64()?,
+        iterations_max: r.u32()?,
+        residue_max: r.f64()?,
+        unconverged: r.u64()?,
+        ..RunCounters::default()
+    };
+    for l in run.csv_lengths.iter_mut() {
+        *l = r.u64()?;
+    }
+    run.wall_seconds = r.f64()?;
+    run.dt0 = r.f64()?;
+    let n = r.len(8 * ENERGY_COLUMNS)?;
+    let mut history = Vec::with_capacity(n);
+    for _ in 0..n {
+        let mut row = [0.0; ENERGY_COLUMNS];
+        for x in row.iter_mut() {
+            *x = r.f64()?;
+        }
+        history.push(row);
+    }
+    let n = r.len(8)?;
+    let mut probe_history = Vec::with_capacity(n);
+    for _ in 0..n {
+        probe_history.push(r.f64s()?);
+    }
+    if r.at != bytes.len() {
+        return Err(format!(
+            "{} bytes left over after the payload",
+            bytes.len() - r.at
+        ));
+    }
+    Ok(Checkpoint {
+        case_source,
+        case_text,
+        sim: s,
+        run,
+        history,
+        probe_history,
+    })
+}
+
+/// The whole file's bytes.
+pub fn encode<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
+    let payload = encode_payload(c);
+    let mut w = Writer(Vec::with_capacity(payload.len() + 64));
+    w.0.extend_from_slice(MAGIC);
+    w.u32(FORMAT_VERSION);
+    w.str(BISPH_VERSION);
+    w.u32(V::DIM as u32);
+    w.u64(payload.len() as u64);
+    w.0.extend_from_slice(&payload);
+    let sum = fnv1a64(&w.0);
+    w.u64(sum);
+    w.0
+}
+
+/// The dimension a checkpoint file declares (read from its header only; the checksum is
+/// checked by [`decode`]).
+pub fn peek_dim(bytes: &[u8]) -> Option<u32> {
+    let mut r = Reader { bytes, at: 0 };
+    if r.take(8).ok()? != MAGIC {
+        return None;
+    }
+    r.u32().ok()?;
+    r.str().ok()?;
+    r.u32().ok()
+}
+
+/// Decodes a checkpoint file's bytes; `path` is for messages only.
+pub fn decode<V: Vector>(path: &Path, bytes: &[u8]) -> Result<Checkpoint<V>, CheckpointError> {
+    let foreign = |reason: String| CheckpointError::Foreign {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let damaged = |reason: String| CheckpointError::Damaged {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+        return Err(foreign(
+            "it does not start with the bisph checkpoint magic".into(),
+        ));
+    }
+    let mut r = Reader { bytes, at: 8 };
+    let format = r.u32().map_err(damaged)?;
+    if format != FORMAT_VERSION {
+        return Err(foreign(format!(
+            "checkpoint format {format}, this bisph reads format {FORMAT_VERSION}"
+        )));
+    }
+    let version = r.str().map_err(damaged)?;
+    if version != BISPH_VERSION {
+        return Err(foreign(format!("written by bisph {version}")));
+    }
+    let dim = r.u32().map_err(damaged)?;
+    if dim as usize != V::DIM {
+        return Err(foreign(format!(
+            "a {dim}-D checkpoint, the case is {}-D",
+            V::DIM
+        )));
+    }
+    if bytes.len() < r.at + 16 {
+        return Err(damaged("truncated header".into()));
+    }
+    let (body, tail) = bytes.split_at(bytes.len() - 8);
+    let mut sum = [0u8; 8];
+    sum.copy_from_slice(tail);
+    if fnv1a64(body) != u64::from_le_bytes(sum) {
+        return Err(damaged("checksum mismatch (truncated or altered)".into()));
+    }
+    let mut r = Reader {
+        bytes: body,
+        at: r.at,
+    };
+    let n = r.len(1).map_err(&damaged)?;
+    let payload = r.take(n).map_err(&damaged)?;
+    if r.at != body.len() {
+        return Err(damaged("bytes after the payload".into()));
+    }
+    decode_payload(payload).map_err(damaged)
+}
+
+/// Reads and decodes `path`.
+pub fn read<V: Vector>(path: &Path) -> Result<Checkpoint<V>, CheckpointError> {
+    let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    decode(path, &bytes)
+}
+
+/// Writes the checkpoint to `path` through a temporary file, synced, then renamed, so a crash
+/// leaves either the old checkpoint or the new one, never a half-written file.
+pub fn write<V: Vector>(path: &Path, c: &Checkpoint<V>) -> Result<(), OutputError> {
+    crate::output::write_atomic(path, &encode(c))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+
+    fn sample() -> Checkpoint<DVec2> {
+        let mut c = Checkpoint::<DVec2> {
+            case_source: "cases/x.toml".into(),
+            case_text: "name = \"x\"".into(),
+            ..Default::default()
+        };
+        c.sim.time = 0.25;
+        c.sim.step = 7;
+        for k in 0..5 {
+            let x = k as f64;
+            c.sim
+                .fluid
+                .push(DVec2::new(x, -x), DVec2::new(0.5, x), 1000.0 + x, 0.1, x);
+        }
+        c.sim.fluid.id.reverse();
+        c.sim.centre = vec![DVec2::new(1.0, 2.0)];
+        c.sim.normal = vec![DVec2::Y];
+        c.sim.area = vec![0.1];
+        c.sim.velocity = vec![DVec2::X];
+        c.sim.reach = vec![0.05];
+        c.sim.pressure = vec![3.0];
+        c.sim.corners = vec![DVec2::ZERO, DVec2::X];
+        c.sim.pistons = vec![(1, 0.1, -0.2, 0.3)];
+        c.run.frame_times = vec![0.0, 0.1];
+        c.run.csv_lengths = [10, 20, 30, 0, 0, 40];
+        c.sim.viscous_dissipation = 0.5;
+        c.sim.forcing_work = 0.75;
+        c.sim.body_force = DVec2::new(1e-3, 0.0);
+        c.sim.flux_history.last = 0.9;
+        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0]];
+        c.probe_history = vec![vec![0.0, 1.0], vec![0.1, 2.0]];
+        c
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let c = sample();
+        let bytes = encode(&c);
+        let back = decode::<DVec2>(Path::new("x"), &bytes).unwrap();
+        // NaN != NaN: compare the encodings.
+        assert_eq!(encode(&back), bytes);
+        assert_eq!(back.sim.fluid.id, c.sim.fluid.id);
+        assert_eq!(back.sim.pistons, c.sim.pistons);
+    }
+
+    #[test]
+    fn damaged_and_foreign_files_are_refused() {
+        let bytes = encode(&sample());
+        let p = Path::new("ck.bin");
+        for cut in [0, 5, 8, 20, bytes.len() / 2, bytes.len() - 1] {
+            assert!(decode::<DVec2>(p, &bytes[..cut]).is_err(), "cut {cut}");
+        }
+        for at in [9, 30, bytes.len() / 2, bytes.len() - 3] {
+            let mut b = bytes.clone();
+            b[at] ^= 0x10;
+            let e = decode::<DVec2>(p, &b).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    CheckpointError::Damaged { .. } | CheckpointError::Foreign { .. }
+                ),
+                "{e}"
+            );
+        }
+        let e = decode::<glam::DVec3>(p, &bytes).unwrap_err();
+        assert!(e.to_string().contains("2-D checkpoint"), "{e}");
+        let e = decode::<DVec2>(p, b"PK\x03\x04 not a checkpoint").unwrap_err();
+        assert!(e.to_string().contains("magic"), "{e}");
+    }
+}

@@ -1,0 +1,515 @@
+//! Divergence diagnostics: watches on the state after every step, and the report written when
+//! one trips (`diagnostics.json`).
+//!
+//! Besides the simulation's own stops (non-finite state, particle outside the domain, time
+//! step below `min_dt`), the run watches:
+//! - the density ratio `rho_i / rho0` against `[density_ratio_min, density_ratio_max]`;
+//! - the particle speed against `speed_over_c0 * c0` (weak compressibility needs `|u| << c0`);
+//! - the time step against `dt_collapse * dt0` (`dt0`: the first step's size);
+//! - wall crossings: a particle whose path in the step went from the fluid side of a wall
+//!   element's plane to its far side through the element itself;
+//! - energy growth: `(E_total - E_total(0)) / E_scale > energy_growth`, at every series row.
+//!
+//! Particles are named by their original index (`id`), stable across reorderings. When several
+//! particles trip at once they are listed worst first.
+
+use crate::case::DiagnosticsSection;
+use crate::checkpoint::SimState;
+use bisph_core::{SimError, Simulation, Vector};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// What stopped a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TripKind {
+    /// A position, velocity or density stopped being finite (or a density fell to zero).
+    NonFinite,
+    /// A particle left the `[domain]`.
+    LeftDomain,
+    /// The time step fell below `time.min_dt` or `diagnostics.dt_collapse * dt0`.
+    TimeStepCollapse,
+    /// A density ratio left its bounds.
+    DensityRatio,
+    /// A particle moved faster than `speed_over_c0 * c0`.
+    Speed,
+    /// A particle crossed a wall element.
+    WallCrossing,
+    /// The total energy grew beyond its bound.
+    EnergyGrowth,
+}
+
+impl TripKind {
+    /// Exit code of `bisph run` for this kind.
+    pub fn exit_code(self) -> u8 {
+        match self {
+            TripKind::NonFinite => 20,
+            TripKind::LeftDomain => 21,
+            TripKind::TimeStepCollapse => 22,
+            TripKind::DensityRatio => 23,
+            TripKind::Speed => 24,
+            TripKind::WallCrossing => 25,
+            TripKind::EnergyGrowth => 26,
+        }
+    }
+
+    /// All kinds (for documentation and tests).
+    pub const ALL: [TripKind; 7] = [
+        TripKind::NonFinite,
+        TripKind::LeftDomain,
+        TripKind::TimeStepCollapse,
+        TripKind::DensityRatio,
+        TripKind::Speed,
+        TripKind::WallCrossing,
+        TripKind::EnergyGrowth,
+    ];
+}
+
+/// One particle named in a report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParticleReport {
+    /// Original index.
+    pub id: u32,
+    /// Position at the trip.
+    pub position: [f64; 3],
+    /// Velocity at the trip.
+    pub velocity: [f64; 3],
+    /// Density at the trip.
+    pub density: f64,
+    /// The watched quantity's value for this particle.
+    pub value: f64,
+}
+
+/// A tripped watch.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// What tripped.
+    pub kind: TripKind,
+    /// Exit code of `bisph run`.
+    pub exit_code: u8,
+    /// The watched quantity.
+    pub quantity: String,
+    /// Worst value found.
+    pub value: f64,
+    /// The allowed range, in words.
+    pub allowed: String,
+    /// Step at which it tripped.
+    pub step: u64,
+    /// Time at which it tripped.
+    pub time: f64,
+    /// Particles involved, worst first (at most [`MAX_REPORTED`]).
+    pub particles: Vec<ParticleReport>,
+    /// How many particles tripped in all.
+    pub particles_tripped: usize,
+    /// Step of the last good state (saved in the checkpoint and the last VTK frame).
+    pub last_good_step: u64,
+    /// Time of the last good state.
+    pub last_good_time: f64,
+    /// The checkpoint holding the last good state (relative to the output directory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub checkpoint: Option<String>,
+    /// The VTK frame holding the last good state (relative to the output directory).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vtk_frame: Option<String>,
+}
+
+impl std::fmt::Display for Diagnosis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.kind {
+            TripKind::NonFinite | TripKind::LeftDomain => write!(
+                f,
+                "{} outside {} at step {} (t = {:.6e} s)",
+                self.quantity, self.allowed, self.step, self.time
+            )?,
+            _ => write!(
+                f,
+                "{} = {:.6e} outside {} at step {} (t = {:.6e} s)",
+                self.quantity, self.value, self.allowed, self.step, self.time
+            )?,
+        }
+        if let Some(p) = self.particles.first() {
+            write!(
+                f,
+                ", particle {} at {:?}{}",
+                p.id,
+                p.position,
+                if self.particles_tripped > 1 {
+                    format!(" (and {} more)", self.particles_tripped - 1)
+                } else {
+                    String::new()
+                }
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Most particles listed in a report.
+pub const MAX_REPORTED: usize = 10;
+
+fn report<V: Vector>(sim: &Simulation<V>, i: usize, value: f64) -> ParticleReport {
+    let f = &sim.fluid;
+    ParticleReport {
+        id: f.id[i],
+        position: f.position[i].to_xyz(),
+        velocity: f.velocity[i].to_xyz(),
+        density: f.density[i],
+        value,
+    }
+}
+
+/// A diagnosis for one of the simulation's own stops, naming its particle from the current
+/// (bad) state.
+pub fn from_sim_error<V: Vector>(e: &SimError, sim: &Simulation<V>) -> Diagnosis {
+    let find = |id: u32| sim.fluid.id.iter().position(|&k| k == id);
+    let (kind, quantity, allowed, value, particle) = match e {
+        SimError::NonFinite {
+            particle, quantity, ..
+        } => (
+            TripKind::NonFinite,
+            format!("particle {quantity}"),
+            "finite numbers (positive density)".to_string(),
+            f64::NAN,
+            Some(*particle),
+        ),
+        SimError::LeftDomain { particle, .. } => (
+            TripKind::LeftDomain,
+            "particle position".to_string(),
+            format!(
+                "the domain {:?} to {:?}",
+                sim.config.domain_min.to_xyz(),
+                sim.config.domain_max.to_xyz()
+            ),
+            f64::NAN,
+            Some(*particle),
+        ),
+        SimError::TimeStepCollapse { dt, .. } => (
+            TripKind::TimeStepCollapse,
+            "time step".to_string(),
+            format!(">= time.min_dt = {:.3e} s", sim.config.min_dt),
+            *dt,
+            None,
+        ),
+    };
+    let (step, time) = match e {
+        SimError::NonFinite { step, time, .. }
+        | SimError::LeftDomain { step, time, .. }
+        | SimError::TimeStepCollapse { step, time, .. } => (*step, *time),
+    };
+    let mut particles = Vec::new();
+    match particle {
+        Some(id) => {
+            if let Some(i) = find(id) {
+                particles.push(report(sim, i, value));
+            }
+        }
+        None => {
+            if let Some(i) = largest_acceleration(sim) {
+                particles.push(report(sim, i, sim.fluid.acceleration[i].length()));
+            }
+        }
+    }
+    Diagnosis {
+        kind,
+        exit_code: kind.exit_code(),
+        quantity,
+        value,
+        allowed,
+        step,
+        time,
+        particles_tripped: particles.len(),
+        particles,
+        last_good_step: 0,
+        last_good_time: 0.0,
+        checkpoint: None,
+        vtk_frame: None,
+    }
+}
+
+fn largest_acceleration<V: Vector>(sim: &Simulation<V>) -> Option<usize> {
+    let a = &sim.fluid.acceleration;
+    (0..a.len()).max_by(|&i, &j| {
+        a[i].length_squared()
+            .total_cmp(&a[j].length_squared())
+            .then(sim.fluid.id[j].cmp(&sim.fluid.id[i]))
+    })
+}
+
+/// The watches, with their scratch buffers.
+#[derive(Debug, Default)]
+pub struct Watch {
+    /// Settings.
+    pub settings: DiagnosticsSection,
+    previous_index: Vec<u32>,
+}
+
+impl Watch {
+    /// Watches with these settings.
+    pub fn new(settings: DiagnosticsSection) -> Self {
+        Watch {
+            settings,
+            previous_index: Vec::new(),
+        }
+    }
+
+    /// Checks the state after a step; `previous` is the state before it, `dt0` the first
+    /// step's size. Returns the first watch that trips, in the order of [`TripKind`].
+    pub fn check<V: Vector>(
+        &mut self,
+        sim: &Simulation<V>,
+        previous: &SimState<V>,
+        dt0: f64,
+    ) -> Option<Diagnosis> {
+        let s = self.settings.clone();
+        if !s.enabled {
+            return None;
+        }
+        if s.wall_crossing && !sim.walls.elements.is_empty() {
+            if let Some(d) = self.wall_crossing(sim, previous) {
+                return Some(d);
+            }
+        }
+        let rho0 = sim.config.eos.rho0();
+        let (lo, hi) = (s.density_ratio_min, s.density_ratio_max);
+        let bad = violators(sim, |i| {
+            let ratio = sim.fluid.density[i] / rho0;
+            if ratio < lo {
+                Some((lo / ratio, ratio))
+            } else if ratio > hi {
+                Some((ratio / hi, ratio))
+            } else {
+                None
+            }
+        });
+        if !bad.is_empty() {
+            return Some(diagnosis(
+                sim,
+                TripKind::DensityRatio,
+                "density ratio rho / rho0",
+                format!("[{lo}, {hi}] (diagnostics.density_ratio_min/max)"),
+                bad,
+            ));
+        }
+        let c0 = sim.config.eos.c0();
+        let limit = s.speed_over_c0 * c0;
+        let bad = violators(sim, |i| {
+            let u = sim.fluid.velocity[i].length();
+            (u > limit).then_some((u, u))
+        });
+        if !bad.is_empty() {
+            return Some(diagnosis(
+                sim,
+                TripKind::Speed,
+                "particle speed [m/s]",
+                format!(
+                    "<= {} c0 = {limit:.4e} m/s (diagnostics.speed_over_c0)",
+                    s.speed_over_c0
+                ),
+                bad,
+            ));
+        }
+        if dt0 > 0.0 && s.dt_collapse > 0.0 {
+            let dt = sim.next_dt();
+            if dt < s.dt_collapse * dt0 {
+                let mut d = diagnosis(
+                    sim,
+                    TripKind::TimeStepCollapse,
+                    "next time step [s]",
+                    format!(
+                        ">= {} dt0 = {:.4e} s (diagnostics.dt_collapse)",
+                        s.dt_collapse,
+                        s.dt_collapse * dt0
+                    ),
+                    largest_acceleration(sim)
+                        .map(|i| (i, 0.0, sim.fluid.acceleration[i].length()))
+                        .into_iter()
+                        .collect(),
+                );
+                d.value = dt;
+                return Some(d);
+            }
+        }
+        None
+    }
+
+    /// Particles whose straight path over the step crossed an element from its fluid side
+    /// (`(r - c_j) . n_j <= 0`, normals point out of the fluid) to its far side, through the
+    /// element's own extent.
+    fn wall_crossing<V: Vector>(
+        &mut self,
+        sim: &Simulation<V>,
+        previous: &SimState<V>,
+    ) -> Option<Diagnosis> {
+        let f = &sim.fluid;
+        let n = f.len();
+        if previous.fluid.id.len() != n {
+            return None;
+        }
+        self.previous_index.clear();
+        self.previous_index.resize(n, u32::MAX);
+        for (k, &id) in previous.fluid.id.iter().enumerate() {
+            if let Some(slot) = self.previous_index.get_mut(id as usize) {
+                *slot = k as u32;
+            }
+        }
+        let e = &sim.walls.elements;
+        let support = sim.config.kernel.support;
+        let index = &self.previous_index;
+        let bad = violators(sim, |i| {
+            let k = *index.get(f.id[i] as usize)? as usize;
+            let p0 = *previous.fluid.position.get(k)?;
+            let p1 = f.position[i];
+            let radius = ((p1 - p0).length() + e.max_reach).min(support);
+            let mut depth: Option<f64> = None;
+            sim.walls
+                .grid
+                .for_each_neighbour(p1, &e.centre, radius, |j, _, _| {
+                    let (c, nrm) = (e.centre[j], e.normal[j]);
+                    let s0 = (p0 - c).dot(nrm);
+                    let s1 = (p1 - c).dot(nrm);
+                    if !(s0 <= 0.0 && s1 > 0.0) {
+                        return;
+                    }
+                    let x = p0 + (p1 - p0) * (-s0 / (s1 - s0));
+                    if inside_element(x, nrm, e.current_corners(j)) {
+                        depth = Some(depth.map_or(s1, |d: f64| d.max(s1)));
+                    }
+                });
+            depth.map(|d| (d, d))
+        });
+        if bad.is_empty() {
+            return None;
+        }
+        Some(diagnosis(
+            sim,
+            TripKind::WallCrossing,
+            "depth behind a crossed wall element [m]",
+            "0 (particles stay on the fluid side; diagnostics.wall_crossing)".into(),
+            bad,
+        ))
+    }
+}
+
+/// `true` when `x` (on the element's plane) lies within the element: between the two end
+/// points of a 2-D segment, inside the convex polygon of a 3-D element.
+fn inside_element<V: Vector>(x: V, normal: V, corners: &[V]) -> bool {
+    match corners.len() {
+        0 | 1 => false,
+        2 => {
+            let (a, b) = (corners[0], corners[1]);
+            let t = (x - a).dot(b - a);
+            t >= 0.0 && t <= (b - a).length_squared()
+        }
+        m => {
+            let n = normal.to_xyz();
+            let mut sign = 0.0;
+            for k in 0..m {
+                let a = corners[k].to_xyz();
+                let b = corners[(k + 1) % m].to_xyz();
+                let p = x.to_xyz();
+                let (e, r) = (
+                    [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                    [p[0] - a[0], p[1] - a[1], p[2] - a[2]],
+                );
+                let c = [
+                    e[1] * r[2] - e[2] * r[1],
+                    e[2] * r[0] - e[0] * r[2],
+                    e[0] * r[1] - e[1] * r[0],
+                ];
+                let s = c[0] * n[0] + c[1] * n[1] + c[2] * n[2];
+                if s != 0.0 {
+                    if sign != 0.0 && s.signum() != sign {
+                        return false;
+                    }
+                    sign = s.signum();
+                }
+            }
+            true
+        }
+    }
+}
+
+/// Particles for which `test` gives `(severity, value)`, worst first (ties by id): in memory
+/// order through an ordered parallel collect, so the result does not depend on threads.
+fn violators<V: Vector>(
+    sim: &Simulation<V>,
+    test: impl Fn(usize) -> Option<(f64, f64)> + Sync,
+) -> Vec<(usize, f64, f64)> {
+    let mut bad: Vec<(usize, f64, f64)> = (0..sim.fluid.len())
+        .into_par_iter()
+        .filter_map(|i| test(i).map(|(sev, v)| (i, sev, v)))
+        .collect();
+    let id = &sim.fluid.id;
+    bad.sort_by(|a, b| b.1.total_cmp(&a.1).then(id[a.0].cmp(&id[b.0])));
+    bad
+}
+
+fn diagnosis<V: Vector>(
+    sim: &Simulation<V>,
+    kind: TripKind,
+    quantity: &str,
+    allowed: String,
+    bad: Vec<(usize, f64, f64)>,
+) -> Diagnosis {
+    let value = bad.first().map_or(f64::NAN, |b| b.2);
+    Diagnosis {
+        kind,
+        exit_code: kind.exit_code(),
+        quantity: quantity.to_string(),
+        value,
+        allowed,
+        step: sim.step,
+        time: sim.time,
+        particles_tripped: bad.len(),
+        particles: bad
+            .iter()
+            .take(MAX_REPORTED)
+            .map(|&(i, _, v)| report(sim, i, v))
+            .collect(),
+        last_good_step: 0,
+        last_good_time: 0.0,
+        checkpoint: None,
+        vtk_frame: None,
+    }
+}
+
+/// The energy-growth watch, at a series row.
+pub fn energy_growth<V: Vector>(
+    settings: &DiagnosticsSection,
+    sim: &Simulation<V>,
+    total: f64,
+    e0: f64,
+    scale: f64,
+) -> Option<Diagnosis> {
+    if !settings.enabled
+        || settings.energy_growth.is_nan()
+        || settings.energy_growth <= 0.0
+        || scale.is_nan()
+        || scale <= 0.0
+    {
+        return None;
+    }
+    let growth = (total - e0) / scale;
+    if growth > settings.energy_growth || growth.is_nan() {
+        let mut d = diagnosis(
+            sim,
+            TripKind::EnergyGrowth,
+            "energy growth (E - E0) / E_scale",
+            format!("<= {} (diagnostics.energy_growth)", settings.energy_growth),
+            Vec::new(),
+        );
+        d.value = growth;
+        // Name the fastest particle: energy grows where the speed does.
+        let u = &sim.fluid.velocity;
+        if let Some(i) = (0..u.len()).max_by(|&i, &j| {
+            u[i].length_squared()
+                .total_cmp(&u[j].length_squared())
+                .then(sim.fluid.id[j].cmp(&sim.fluid.id[i]))
+        }) {
+            d.particles.push(report(sim, i, u[i].length()));
+            d.particles_tripped = 1;
+        }
+        return Some(d);
+    }
+    None
+}

@@ -1,0 +1,174 @@
+//! Validation cases of free rigid bodies and 3-D walls from meshes: a floating box settling
+//! to its Archimedes draft, SPHERIC test 2 (paper 2, 3.2) and the Apollo capsule water
+//! landing (paper 1, 5.4).
+
+use crate::paper1_cases::{column, line, load, plot, read_columns, run};
+use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// The rigid-body and mesh-wall validation cases.
+pub fn cases() -> Vec<Box<dyn ValidationCase>> {
+    vec![
+        Box::new(FloatingBox),
+        Box::new(crate::spheric2::SphericTest2),
+        Box::new(Apollo),
+    ]
+}
+
+/// Mean of `y` where `t` lies in `[a, b]`.
+pub(crate) fn mean_between(t: &[f64], y: &[f64], a: f64, b: f64) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for (&t, &y) in t.iter().zip(y) {
+        if t >= a && t <= b {
+            s += y;
+            n += 1;
+        }
+    }
+    s / n as f64
+}
+
+/// Mean interval between upward crossings of `mid` after `t0`.
+pub(crate) fn period_about(t: &[f64], x: &[f64], mid: f64, t0: f64) -> f64 {
+    let mut ups = Vec::new();
+    for k in 1..x.len() {
+        if t[k] > t0 && x[k - 1] < mid && x[k] >= mid {
+            ups.push(t[k - 1] + (mid - x[k - 1]) / (x[k] - x[k - 1]) * (t[k] - t[k - 1]));
+        }
+    }
+    if ups.len() < 2 {
+        return f64::NAN;
+    }
+    (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64
+}
+
+/// Floating box (2-D free body) settling to its Archimedes draft.
+pub struct FloatingBox;
+
+impl ValidationCase for FloatingBox {
+    fn name(&self) -> &'static str {
+        "floating-box-2d"
+    }
+    fn description(&self) -> &'static str {
+        "free rigid body: a box released at half its draft settles to the Archimedes draft; heave period between the linear estimates without and with added mass"
+    }
+    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
+        let settings: &[&str] = if quick {
+            &[
+                "resolution.dx=0.04",
+                "time.end=3.0",
+                "output.vtk_interval=0",
+            ]
+        } else {
+            &["resolution.dx=0.02"]
+        };
+        let loaded = load(
+            "floating-box-2d",
+            include_str!("../../../cases/floating-box-2d.toml"),
+            settings,
+        )?;
+        let s = run(&loaded, out)?;
+        let (h, rows) = read_columns(&out.join("body_box.csv"))?;
+        let t = column(&h, &rows, "t")?;
+        let y = column(&h, &rows, "y")?;
+        let roll = column(&h, &rows, "yaw")?;
+        let (ph, prow) = read_columns(&out.join("probes.csv"))?;
+        let tp = column(&ph, &prow, "t")?;
+        let p = column(&ph, &prow, "level")?;
+        // Case constants (cases/floating-box-2d.toml).
+        let (rho, g, b, half_height, mass, probe_y) = (1000.0, 9.81, 0.6, 0.2, 120.0, 0.3);
+        let draft_ref = mass / (rho * b);
+        let end = t.last().copied().unwrap_or(0.0);
+        let settle = 0.6;
+        let level: Vec<f64> = p.iter().map(|p| probe_y + p / (rho * g)).collect();
+        let level_mean = mean_between(&tp, &level, settle, end);
+        let centre_mean = mean_between(&t, &y, settle, end);
+        let draft = level_mean - (centre_mean - half_height);
+        let period = period_about(&t, &y, centre_mean, 0.2);
+        let t0 = 2.0 * PI * (draft_ref / g).sqrt();
+        // Added mass of a half-immersed circle of diameter B: rho pi B^2 / 8.
+        let added = rho * PI * b * b / 8.0;
+        let t_added = t0 * (1.0 + added / mass).sqrt();
+        let exchange = (s.energy_drift_max_relative
+            - s.fluid_body_energy_drift_max_relative.unwrap_or(f64::NAN))
+        .abs();
+        let plots = vec![plot(
+            out,
+            "floating_box.png",
+            "Floating box: centre height and far-field level",
+            "t [s]",
+            "y [m]",
+            vec![
+                line("box centre", t.clone(), y.clone()),
+                line("level (probe)", tp.clone(), level),
+                line(
+                    "Archimedes centre",
+                    vec![0.0, end],
+                    vec![level_mean - draft_ref + half_height; 2],
+                ),
+            ],
+        )?];
+        let max_roll = roll.iter().fold(0.0f64, |a, r| a.max(r.abs()));
+        Ok(CaseReport {
+            name: self.name().into(),
+            checks: vec![
+                Check::new(
+                    "equilibrium draft [m]",
+                    draft,
+                    draft_ref,
+                    Tolerance::Relative(0.05),
+                    "Archimedes d = m / (rho0 B); issue 8: 5% at the quick resolution",
+                ),
+                Check::new(
+                    "heave period / no-added-mass period",
+                    period / t0,
+                    1.0,
+                    Tolerance::AtLeast,
+                    "T0 = 2 pi sqrt(d/g): the added mass lengthens the period",
+                ),
+                Check::new(
+                    "heave period / period with added mass rho pi B^2/8",
+                    period / t_added,
+                    1.1,
+                    Tolerance::AtMost,
+                    "linear heave with the added mass of a half-immersed circle of diameter B",
+                ),
+                Check::new(
+                    "particles inside the box at the end",
+                    s.particles_behind_walls as f64,
+                    0.0,
+                    Tolerance::AtMost,
+                    "no particle crosses a wall",
+                ),
+            ],
+            plots,
+            notes: vec![format!(
+                "draft {draft:.4} m (Archimedes {draft_ref:.4}; far-field level {level_mean:.4} m from the probe, mean centre {centre_mean:.4} m over t in [{settle}, {end:.2}] s); heave period {period:.4} s (T0 = {t0:.4}, with added mass {t_added:.4}); largest tilt {max_roll:.3} deg; energy drift (fluid + wall work) {:.3e}, fluid + body energy drift {:.3e} (max), difference {exchange:.2e}: the fluid-body exchange closes; {} particles, {} steps, {:.2} iterations per step.",
+                s.energy_drift_max_relative,
+                s.fluid_body_energy_drift_max_relative.unwrap_or(f64::NAN),
+                s.fluid_particles,
+                s.steps,
+                s.iterations_mean,
+            )],
+            wall_seconds: 0.0,
+        })
+    }
+}
+
+/// Apollo capsule water landing (paper 1, 5.4).
+pub struct Apollo;
+
+impl ValidationCase for Apollo {
+    fn name(&self) -> &'static str {
+        "apollo"
+    }
+    fn description(&self) -> &'static str {
+        "paper 1, 5.4: Apollo capsule water landing, free 6-DOF body; no particle inside, fluid + body energy drift with the body inside the iterations vs staggered"
+    }
+    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
+        crate::apollo::run_apollo(self.name(), quick, out)
+    }
+    fn in_quick_suite(&self) -> bool {
+        false
+    }
+}

@@ -1,0 +1,371 @@
+//! Checkpoint and restart: runs killed with SIGKILL at seeded random points (and one stopped
+//! with SIGTERM), resumed with `bisph run --resume`, must leave outputs byte-identical to an
+//! uninterrupted run: every CSV series, the `.pvd` indices and every VTK frame. Damaged and
+//! foreign checkpoints are refused.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn exe() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_bisph"))
+}
+
+fn cases_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("bisph-restart-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A small seeded generator (64-bit LCG, top bits).
+struct Lcg(u64);
+
+impl Lcg {
+    fn below(&mut self, n: u64) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 33) % n.max(1)
+    }
+}
+
+struct Case {
+    name: &'static str,
+    file: &'static str,
+    sets: &'static [&'static str],
+    /// A file with one row per step, polled to pick kill points.
+    per_step: &'static str,
+    checkpoint_steps: &'static str,
+}
+
+const PISTON: Case = Case {
+    name: "piston",
+    file: "adiabatic-piston.toml",
+    sets: &[
+        "resolution.dx=0.066",
+        "resolution.h_over_dx=2.0",
+        "time.end=2.0",
+        "output.vtk_interval=0.4",
+        "output.plots=false",
+    ],
+    per_step: "midpoint.csv",
+    checkpoint_steps: "6",
+};
+
+const DAM_BREAK: Case = Case {
+    name: "dam",
+    file: "dam-break-2d.toml",
+    sets: &[
+        "resolution.dx=0.04",
+        "time.end=0.25",
+        "output.vtk_interval=0.05",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "energy.csv",
+    checkpoint_steps: "9",
+};
+
+const DAM_BREAK_3D: Case = Case {
+    name: "dam3d",
+    file: "dam-break-3d.toml",
+    sets: &[
+        "resolution.dx=0.04",
+        "time.end=0.1",
+        "output.vtk_interval=0.05",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "energy.csv",
+    checkpoint_steps: "5",
+};
+
+const POISEUILLE: Case = Case {
+    name: "poiseuille",
+    file: "poiseuille-flux.toml",
+    sets: &[
+        "time.end=0.08",
+        "output.vtk_interval=0.04",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "flux.csv",
+    checkpoint_steps: "7",
+};
+
+fn fresh_args(case: &Case, out: &Path) -> Vec<String> {
+    let mut a = vec![
+        "run".to_string(),
+        cases_dir().join(case.file).display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--quiet".into(),
+        "--threads".into(),
+        "1".into(),
+        "--checkpoint-steps".into(),
+        case.checkpoint_steps.into(),
+    ];
+    for s in case.sets {
+        a.push("--set".into());
+        a.push(s.to_string());
+    }
+    a
+}
+
+fn resume_args(case: &Case, out: &Path, threads: &str) -> Vec<String> {
+    [
+        "run",
+        "--resume",
+        &out.display().to_string(),
+        "--quiet",
+        "--threads",
+        threads,
+        "--checkpoint-steps",
+        case.checkpoint_steps,
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn run_to_end(args: &[String]) -> Output {
+    let out = exe().args(args).output().expect("bisph runs");
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn lines(path: &Path) -> usize {
+    std::fs::read(path)
+        .map(|b| b.iter().filter(|&&c| c == b'\n').count())
+        .unwrap_or(0)
+}
+
+/// Waits until `file` has more than `rows` lines or the child ends; returns whether it was
+/// still running (and then kills it with SIGKILL).
+fn kill_after(child: &mut Child, file: &Path, rows: usize) -> bool {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        if lines(file) > rows || start.elapsed() > Duration::from_secs(30) {
+            child.kill().unwrap(); // SIGKILL on Unix
+            child.wait().unwrap();
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// Every output of a finished run, by relative path (`summary.json` and plots aside: they hold
+/// wall-clock times).
+fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    for sub in ["", "vtk"] {
+        let d = dir.join(sub);
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().to_string();
+            let keep = name.ends_with(".csv")
+                || name.ends_with(".pvd")
+                || name.ends_with(".vtu")
+                || name == "case.toml";
+            if path.is_file() && keep {
+                files.push((format!("{sub}/{name}"), std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+fn compare(reference: &Path, resumed: &Path, what: &str) {
+    let (a, b) = (outputs(reference), outputs(resumed));
+    let names = |v: &[(String, Vec<u8>)]| v.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&a), names(&b), "{what}: different output files");
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{what}: {name} differs from the uninterrupted run");
+    }
+    assert!(
+        !resumed.join("checkpoint.bin").exists(),
+        "{what}: a finished run removes its checkpoint"
+    );
+}
+
+/// Kills `chains` runs of `case` `kills_per_chain` times each at seeded random steps, resumes
+/// each to the end and compares with an uninterrupted run. Returns the number of kills that hit
+/// a running process.
+fn kill_resume_compare(
+    case: &Case,
+    seed: u64,
+    chains: usize,
+    kills_per_chain: usize,
+) -> (usize, usize) {
+    let reference = temp_dir(&format!("{}-reference", case.name));
+    run_to_end(&fresh_args(case, &reference));
+    let total = lines(&reference.join(case.per_step));
+    assert!(total > 30, "{}: {total} rows", case.name);
+    let mut rng = Lcg(seed);
+    let (mut kills, mut resumes) = (0, 0);
+    for chain in 0..chains {
+        let dir = temp_dir(&format!("{}-chain{chain}", case.name));
+        let mut args = fresh_args(case, &dir);
+        for k in 0..kills_per_chain {
+            let rows = lines(&dir.join(case.per_step));
+            let target =
+                rows + 1 + rng.below((total.saturating_sub(rows) as u64).max(2) * 2 / 3) as usize;
+            let mut child = exe()
+                .args(&args)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            if kill_after(&mut child, &dir.join(case.per_step), target) {
+                kills += 1;
+            }
+            // Resume from here on; without a checkpoint yet, start afresh.
+            args = if dir.join("checkpoint.bin").exists() {
+                resumes += 1;
+                // Alternate thread counts: a resumed run must not depend on them either.
+                resume_args(case, &dir, if (chain + k) % 2 == 0 { "2" } else { "1" })
+            } else {
+                fresh_args(case, &dir)
+            };
+        }
+        run_to_end(&args);
+        compare(&reference, &dir, &format!("{} chain {chain}", case.name));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let _ = std::fs::remove_dir_all(&reference);
+    (kills, resumes)
+}
+
+/// Midpoint integrator with a piston (its state, the stretching walls, the iteration history)
+/// and Verlet on the dam break (VTK frames included): 24 seeded SIGKILLs in all.
+#[test]
+fn killed_runs_resume_bit_identically() {
+    let (piston, piston_resumes) = kill_resume_compare(&PISTON, 0x5eed_0001, 4, 3);
+    let (dam, dam_resumes) = kill_resume_compare(&DAM_BREAK, 0x5eed_0002, 4, 3);
+    eprintln!(
+        "SIGKILLs that hit a running process: piston {piston}, dam break {dam}; \
+         resumed from a checkpoint: {piston_resumes} and {dam_resumes} times"
+    );
+    assert!(piston_resumes >= 6 && dam_resumes >= 6);
+    // A kill can miss only when a run finishes before its kill point.
+    assert!(
+        piston + dam >= 20,
+        "only {} kills hit a running process",
+        piston + dam
+    );
+}
+
+/// 3-D: quadrilateral elements, a 3-D cell grid; two SIGKILLs, resumed on two threads.
+#[test]
+fn killed_3d_run_resumes_bit_identically() {
+    let (kills, resumes) = kill_resume_compare(&DAM_BREAK_3D, 0x5eed_0003, 1, 2);
+    eprintln!("3-D: {kills} SIGKILLs, {resumes} resumes");
+    assert!(resumes >= 1);
+}
+
+/// Periodic flux-driven Poiseuille flow with viscosity (paper 3, eq 63): the controller's
+/// memory, the driving force and the viscous and forcing energy books are part of the
+/// checkpoint; `flux.csv` resumes like the other series.
+#[test]
+fn killed_flux_run_resumes_bit_identically() {
+    let (kills, resumes) = kill_resume_compare(&POISEUILLE, 0x5eed_0004, 2, 2);
+    eprintln!("poiseuille-flux: {kills} SIGKILLs, {resumes} resumes");
+    assert!(resumes >= 2);
+}
+
+/// SIGTERM: the run finishes its step, writes a checkpoint, exits with code 10 and its
+/// summary says so; the resumed run is identical to an uninterrupted one.
+#[test]
+fn sigterm_checkpoints_and_resumes() {
+    let case = &DAM_BREAK;
+    let reference = temp_dir("term-reference");
+    run_to_end(&fresh_args(case, &reference));
+    let dir = temp_dir("term");
+    let mut args = fresh_args(case, &dir);
+    let k = args.iter().position(|a| a == "--checkpoint-steps").unwrap();
+    args[k + 1] = "0".into();
+    let child = exe()
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while lines(&dir.join(case.per_step)) < 40 && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(10), "{stderr}");
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(summary.contains("interrupted"), "{summary}");
+    run_to_end(&resume_args(case, &dir, "1"));
+    compare(&reference, &dir, "sigterm");
+}
+
+/// Damaged, truncated, foreign and missing checkpoints are refused with exit code 5 and a
+/// message naming the file, before anything is written.
+#[test]
+fn bad_checkpoints_are_refused() {
+    let case = &PISTON;
+    let dir = temp_dir("refuse");
+    let mut child = exe()
+        .args(fresh_args(case, &dir))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let ck = dir.join("checkpoint.bin");
+    let start = Instant::now();
+    while !ck.exists() && start.elapsed() < Duration::from_secs(30) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let good = std::fs::read(&ck).unwrap();
+    let energy = std::fs::read(dir.join("energy.csv")).unwrap();
+    let attempt = |bytes: &[u8], needle: &str| {
+        std::fs::write(&ck, bytes).unwrap();
+        let out = exe().args(resume_args(case, &dir, "1")).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(5), "{needle}: {stderr}");
+        assert!(stderr.contains(needle), "{needle}: {stderr}");
+        assert!(stderr.contains("checkpoint.bin"), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        // Nothing touched.
+        assert_eq!(std::fs::read(dir.join("energy.csv")).unwrap(), energy);
+    };
+    let mut flipped = good.clone();
+    let mid = flipped.len() / 2;
+    flipped[mid] ^= 0x01;
+    attempt(&flipped, "damaged");
+    attempt(&good[..good.len() - 100], "damaged");
+    attempt(b"name = \"not a checkpoint\"\n", "magic");
+    let mut other_version = good.clone();
+    // The version string follows the magic (8 bytes), the format (4) and its length (8).
+    other_version[20] = b'9';
+    attempt(&other_version, "written by bisph 9");
+    std::fs::remove_file(&ck).unwrap();
+    let out = exe().args(resume_args(case, &dir, "1")).output().unwrap();
+    assert_eq!(out.status.code(), Some(5));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read checkpoint"));
+}
