@@ -17,7 +17,12 @@ pub struct EnergyBudget {
     pub potential: f64,
     /// Cumulative energy given by the fluid to walls and bodies, `int sum_j F_j . U_j dt`.
     pub wall_work: f64,
-    /// Sum of the four.
+    /// Cumulative viscous dissipation `int sum_i -m_i u_i . a_i^visc dt` (paper 3 eq 18 with
+    /// its wall shear; zero without viscosity).
+    pub viscous_dissipation: f64,
+    /// Cumulative work done on the fluid by the driving body force (zero without one).
+    pub forcing_work: f64,
+    /// `kinetic + compressible + potential + wall_work + viscous_dissipation - forcing_work`.
     pub total: f64,
 }
 

@@ -1,7 +1,8 @@
 //! Quintic Wendland (C2) kernel with support radius `2h`.
 //!
-//! `W(q) = alpha_d (1 - q/2)^4 (2q + 1)`, `q = |r|/h`, with `alpha_2 = 7 / (4 pi h^2)` and
-//! `alpha_3 = 21 / (16 pi h^3)` so that it integrates to one over the plane / space.
+//! `W(q) = alpha_d (1 - q/2)^4 (2q + 1)`, `q = |r|/h`, with `alpha_1 = 3 / (4 h)` (for the
+//! 1-D wave check of paper 3), `alpha_2 = 7 / (4 pi h^2)` and `alpha_3 = 21 / (16 pi h^3)` so
+//! that it integrates to one over the line / plane / space.
 //! Its gradient is `grad W(r) = -5 alpha_d / h^2 (1 - q/2)^3 r`: a scalar factor times the
 //! argument vector, with no division by `|r|`.
 
@@ -21,12 +22,12 @@ pub struct Wendland {
 }
 
 impl Wendland {
-    /// Kernel of smoothing length `h` in `dim` (2 or 3) dimensions.
+    /// Kernel of smoothing length `h` in `dim` (1, 2 or 3) dimensions.
     pub fn new(h: f64, dim: usize) -> Self {
-        let alpha = if dim == 2 {
-            7.0 / (4.0 * PI * h * h)
-        } else {
-            21.0 / (16.0 * PI * h * h * h)
+        let alpha = match dim {
+            1 => 3.0 / (4.0 * h),
+            2 => 7.0 / (4.0 * PI * h * h),
+            _ => 21.0 / (16.0 * PI * h * h * h),
         };
         Wendland {
             h,

@@ -4,9 +4,79 @@
 //! `3^d` cells around it. The grid is rebuilt every step by a counting sort (no per-step
 //! allocation once the buffers have grown; cell indices are computed in parallel); for the fluid the sort order is also used to
 //! reorder the particles themselves, so a cell's particles are contiguous in memory.
+//!
+//! **Periodic axes.** Along an axis of a [`Periodicity`] the grid spans exactly one period
+//! `[min, min + L)` with `floor(L / cell)` cells (so cells are at least `cell` wide), and the
+//! cells around a point wrap around. Every visited point comes with the shift (a multiple of
+//! `L` per periodic axis) that brings its image next to the query point; the neighbour
+//! queries hand out the minimum-image displacement `r_ij = points[j] + shift - x`, so pair
+//! terms never see a raw position difference across the period. Stored points must lie in
+//! the primary period (see [`Periodicity::wrap`]); periods must hold at least three cells.
 
 use crate::dim::Vector;
 use rayon::prelude::*;
+
+/// Periodic axes of a domain: along axis `k` with `length[k] > 0` the point `r` and
+/// `r + length[k] e_k` are the same point; `length[k] = 0` marks a non-periodic axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Periodicity<V> {
+    /// Lower end of the period along each axis.
+    pub min: V,
+    /// Period along each axis (0 = not periodic).
+    pub length: V,
+}
+
+impl<V: Vector> Periodicity<V> {
+    /// No periodic axis.
+    pub fn none() -> Self {
+        Periodicity {
+            min: V::ZERO,
+            length: V::ZERO,
+        }
+    }
+
+    /// `true` when axis `k` is periodic.
+    #[inline(always)]
+    pub fn is_periodic(&self, k: usize) -> bool {
+        self.length.get(k) > 0.0
+    }
+
+    /// `true` when some axis is periodic.
+    pub fn any(&self) -> bool {
+        (0..V::DIM).any(|k| self.is_periodic(k))
+    }
+
+    /// The image of `r` in the primary period `[min, min + L)` along every periodic axis.
+    #[inline(always)]
+    pub fn wrap(&self, r: V) -> V {
+        let mut w = r;
+        for k in 0..V::DIM {
+            let l = self.length.get(k);
+            if l > 0.0 {
+                let lo = self.min.get(k);
+                let mut x = lo + (r.get(k) - lo).rem_euclid(l);
+                if x >= lo + l {
+                    x = lo; // rem_euclid may round up to the period itself
+                }
+                w.set(k, x);
+            }
+        }
+        w
+    }
+
+    /// The minimum-image form of a displacement `d` (each periodic component in `[-L/2, L/2]`).
+    #[inline(always)]
+    pub fn minimum_image(&self, d: V) -> V {
+        let mut m = d;
+        for k in 0..V::DIM {
+            let l = self.length.get(k);
+            if l > 0.0 {
+                m.set(k, d.get(k) - l * (d.get(k) / l).round());
+            }
+        }
+        m
+    }
+}
 
 /// Cell lists over a set of points: `items[cell_start[c]..cell_start[c + 1]]` are the points
 /// in cell `c`.
@@ -14,8 +84,12 @@ use rayon::prelude::*;
 pub struct CellGrid<V: Vector> {
     origin: V,
     inv_cell: f64,
+    /// Inverse cell side per axis (periodic axes have cells stretched to fit the period).
+    inv_cells: [f64; 3],
     cell: f64,
     dims: [usize; 3],
+    period: Periodicity<V>,
+    periodic: bool,
     cell_start: Vec<u32>,
     items: Vec<u32>,
     cell_of: Vec<u32>,
@@ -27,12 +101,43 @@ impl<V: Vector> CellGrid<V> {
         CellGrid {
             origin: V::ZERO,
             inv_cell: 1.0 / cell_size,
+            inv_cells: [1.0 / cell_size; 3],
             cell: cell_size,
             dims: [1; 3],
+            period: Periodicity::none(),
+            periodic: false,
             cell_start: vec![0, 0],
             items: Vec::new(),
             cell_of: Vec::new(),
         }
+    }
+
+    /// An empty grid with cells of at least `cell_size` that wraps around the periodic axes
+    /// of `period`. Fails when a period holds fewer than three cells (then one point could
+    /// meet two images of another).
+    pub fn with_period(cell_size: f64, period: Periodicity<V>) -> Result<Self, String> {
+        let mut grid = Self::new(cell_size);
+        for k in 0..V::DIM {
+            if period.is_periodic(k) {
+                let l = period.length.get(k);
+                let cells = (l / cell_size).floor();
+                if cells < 3.0 {
+                    return Err(format!(
+                        "the period {l} along axis {k} must hold at least three kernel supports ({})",
+                        3.0 * cell_size
+                    ));
+                }
+                grid.inv_cells[k] = cells / l;
+            }
+        }
+        grid.periodic = period.any();
+        grid.period = period;
+        Ok(grid)
+    }
+
+    /// The grid's periodic axes.
+    pub fn periodicity(&self) -> &Periodicity<V> {
+        &self.period
     }
 
     /// Side of a cell.
@@ -60,11 +165,16 @@ impl<V: Vector> CellGrid<V> {
             lo = lo.min_by_component(p);
             hi = hi.max_by_component(p);
         }
-        self.origin = lo;
         let mut dims = [1usize; 3];
         for (k, d) in dims.iter_mut().enumerate().take(V::DIM) {
-            *d = ((hi.get(k) - lo.get(k)) * self.inv_cell).floor() as usize + 1;
+            if self.period.is_periodic(k) {
+                lo.set(k, self.period.min.get(k));
+                *d = (self.period.length.get(k) * self.inv_cells[k]).round() as usize;
+            } else {
+                *d = ((hi.get(k) - lo.get(k)) * self.inv_cell).floor() as usize + 1;
+            }
         }
+        self.origin = lo;
         self.dims = dims;
         let cells = dims[0] * dims[1] * dims[2];
         let mut cell_of = std::mem::take(&mut self.cell_of);
@@ -108,7 +218,7 @@ impl<V: Vector> CellGrid<V> {
     fn coords(&self, p: V) -> [i64; 3] {
         let mut c = [0i64; 3];
         for (k, ck) in c.iter_mut().enumerate().take(V::DIM) {
-            *ck = ((p.get(k) - self.origin.get(k)) * self.inv_cell).floor() as i64;
+            *ck = ((p.get(k) - self.origin.get(k)) * self.inv_cells[k]).floor() as i64;
         }
         c
     }
@@ -165,8 +275,99 @@ impl<V: Vector> CellGrid<V> {
         }
     }
 
-    /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` for every point with
-    /// `|r_ij| < radius`.
+    /// Calls `visit(j, shift)` for every point `j` in the cells around `x`, where
+    /// `points[j] + shift` is the image of point `j` next to `x` (`shift` is zero without
+    /// periodic axes). The caller filters by distance.
+    #[inline(always)]
+    pub fn for_each_candidate_shifted(&self, x: V, mut visit: impl FnMut(usize, V)) {
+        if self.periodic {
+            self.for_each_in_periodic_span(x, 1, visit);
+        } else {
+            self.for_each_in_span(x, 1, |j| visit(j, V::ZERO));
+        }
+    }
+
+    /// [`CellGrid::for_each_candidate_within`] with the image shift of each point, as in
+    /// [`CellGrid::for_each_candidate_shifted`].
+    pub fn for_each_candidate_within_shifted(
+        &self,
+        x: V,
+        radius: f64,
+        mut visit: impl FnMut(usize, V),
+    ) {
+        let span = ((radius * self.inv_cell).ceil() as i64).max(1);
+        if self.periodic {
+            self.for_each_in_periodic_span(x, span, visit);
+        } else {
+            self.for_each_in_span(x, span, |j| visit(j, V::ZERO));
+        }
+    }
+
+    /// Visits the cells at most `span` cells from the cell of `x`, wrapping around periodic
+    /// axes (each cell once, at the image nearest to `x`), with the shift of each cell's image.
+    fn for_each_in_periodic_span(&self, x: V, span: i64, mut visit: impl FnMut(usize, V)) {
+        let c = self.coords(x);
+        // Per axis: up to three runs of cell indices (lo, hi, shift along the axis).
+        let mut runs = [[(0usize, 0usize, 0.0f64); 3]; 3];
+        let mut counts = [0usize; 3];
+        for k in 0..3 {
+            let d = self.dims[k] as i64;
+            let s = if k < V::DIM { span } else { 0 };
+            if k < V::DIM && self.period.is_periodic(k) {
+                let l = self.period.length.get(k);
+                let (mut a, mut b) = (c[k] - s, c[k] + s);
+                if b - a + 1 > d {
+                    a = c[k] - (d - 1) / 2;
+                    b = a + d - 1;
+                }
+                let mut m = a;
+                while m <= b {
+                    let wrap = m.div_euclid(d);
+                    let end = b.min((wrap + 1) * d - 1);
+                    runs[k][counts[k]] = (
+                        (m - wrap * d) as usize,
+                        (end - wrap * d) as usize,
+                        wrap as f64 * l,
+                    );
+                    counts[k] += 1;
+                    m = end + 1;
+                }
+            } else {
+                let a = (c[k] - s).max(0);
+                let b = (c[k] + s).min(d - 1);
+                if a > b {
+                    return;
+                }
+                runs[k][0] = (a as usize, b as usize, 0.0);
+                counts[k] = 1;
+            }
+        }
+        let mut shift = V::ZERO;
+        for &(z0, z1, sz) in &runs[2][..counts[2]] {
+            if V::DIM == 3 {
+                shift.set(2, sz);
+            }
+            for cz in z0..=z1 {
+                for &(y0, y1, sy) in &runs[1][..counts[1]] {
+                    shift.set(1, sy);
+                    for cy in y0..=y1 {
+                        let row = self.dims[0] * (cy + self.dims[1] * cz);
+                        for &(x0, x1, sx) in &runs[0][..counts[0]] {
+                            shift.set(0, sx);
+                            let start = self.cell_start[row + x0] as usize;
+                            let end = self.cell_start[row + x1 + 1] as usize;
+                            for &j in &self.items[start..end] {
+                                visit(j as usize, shift);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
+    /// periodic axes) for every point with `|r_ij| < radius`.
     #[inline(always)]
     pub fn for_each_neighbour(
         &self,
@@ -176,6 +377,16 @@ impl<V: Vector> CellGrid<V> {
         mut visit: impl FnMut(usize, V, f64),
     ) {
         let r2max = radius * radius;
+        if self.periodic {
+            self.for_each_in_periodic_span(x, 1, |j, shift| {
+                let r = points[j] + shift - x;
+                let r2 = r.length_squared();
+                if r2 < r2max {
+                    visit(j, r, r2.sqrt());
+                }
+            });
+            return;
+        }
         self.for_each_candidate(x, |j| {
             let r = points[j] - x;
             let r2 = r.length_squared();
@@ -231,6 +442,92 @@ mod tests {
             .map(|c| DVec3::new(c[0], c[1], 0.3 * c[2]))
             .collect();
         check(p3, 0.15);
+    }
+
+    fn check_periodic<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let points: Vec<V> = points.into_iter().map(|p| period.wrap(p)).collect();
+        let mut grid = CellGrid::with_period(radius, period).unwrap();
+        grid.rebuild(&points);
+        let mut total = 0;
+        let mut across = 0;
+        for (i, &x) in points.iter().enumerate() {
+            let mut found = Vec::new();
+            grid.for_each_neighbour(x, &points, radius, |j, r, d| {
+                let m = period.minimum_image(points[j] - x);
+                assert!(
+                    (r - m).length() < 1e-12,
+                    "displacement is the minimum image"
+                );
+                assert!((r.length() - d).abs() < 1e-12);
+                if (points[j] - x - r).length() > 1e-12 {
+                    across += 1;
+                }
+                found.push(j);
+            });
+            found.sort();
+            let brute: Vec<usize> = (0..points.len())
+                .filter(|&j| period.minimum_image(points[j] - x).length_squared() < radius * radius)
+                .collect();
+            assert_eq!(found, brute, "point {i}");
+            total += found.len();
+        }
+        assert!(total > points.len(), "test must see real neighbours");
+        assert!(across > 0, "test must see pairs across the period");
+    }
+
+    #[test]
+    fn periodic_equals_brute_force_minimum_image_in_2d_and_3d() {
+        let r: Vec<f64> = pseudo_random(3000, 11).collect();
+        // 2-D: periodic in x only, in y only, in both.
+        let p2: Vec<DVec2> = r
+            .chunks(2)
+            .map(|c| DVec2::new(c[0] - 0.1, 0.6 * c[1]))
+            .collect();
+        for length in [
+            DVec2::new(1.0, 0.0),
+            DVec2::new(0.0, 0.6),
+            DVec2::new(1.0, 0.6),
+        ] {
+            let period = Periodicity {
+                min: DVec2::new(-0.1, 0.0),
+                length,
+            };
+            check_periodic(p2.clone(), 0.07, period);
+            // a period of exactly three cells and one just above
+            check_periodic(p2.clone(), 0.199, period);
+        }
+        let p3: Vec<DVec3> = r
+            .chunks(3)
+            .map(|c| DVec3::new(c[0], c[1], 0.5 * c[2]))
+            .collect();
+        for length in [DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.5)] {
+            let period = Periodicity {
+                min: DVec3::ZERO,
+                length,
+            };
+            check_periodic(p3.clone(), 0.15, period);
+        }
+    }
+
+    #[test]
+    fn a_period_shorter_than_three_cells_is_refused() {
+        let period = Periodicity {
+            min: DVec2::ZERO,
+            length: DVec2::new(0.5, 0.0),
+        };
+        assert!(CellGrid::with_period(0.2, period).is_err());
+        assert!(CellGrid::with_period(0.16, period).is_ok());
+    }
+
+    #[test]
+    fn wrap_lands_in_the_primary_period() {
+        let period = Periodicity {
+            min: DVec2::new(-1.0, 0.0),
+            length: DVec2::new(2.0, 0.0),
+        };
+        let w = period.wrap(DVec2::new(1.5, 7.0));
+        assert!((w.x + 0.5).abs() < 1e-15 && w.y == 7.0);
+        assert_eq!(period.wrap(DVec2::new(-1.0 - 1e-18, 0.0)).x, -1.0);
     }
 
     #[test]

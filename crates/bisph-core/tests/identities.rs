@@ -92,6 +92,8 @@ fn powers<V: Vector>(
             hydrostatic_gradient: V::ZERO,
             form: DiffusionForm::Laplacian,
         },
+        viscosity: Default::default(),
+        body_force: V::ZERO,
         density_power: 0,
         summation_density: false,
     };

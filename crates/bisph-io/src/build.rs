@@ -410,6 +410,20 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         }
     };
 
+    let mut periodicity = bisph_core::neighbours::Periodicity::<V>::none();
+    if let Some(d) = &case.domain {
+        for axis in d.periodic_axes() {
+            periodicity.min.set(axis, d.min[axis]);
+            periodicity.length.set(axis, d.max[axis] - d.min[axis]);
+        }
+    }
+    if bisph_core::neighbours::CellGrid::with_period(kernel.support, periodicity).is_err() {
+        return Err(loaded.error(
+            "domain.periodic",
+            "every period must hold at least three kernel supports",
+        ));
+    }
+
     let probes = case
         .probe
         .iter()
@@ -471,6 +485,26 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
         reorder_interval: 1,
         elastic_bounce: case.elastic_bounce,
+        periodicity,
+        viscosity: bisph_core::terms::Viscosity {
+            nu: case.fluid.viscosity,
+            min_wall_distance: 0.5 * dx,
+        },
+        flux: case.flux.as_ref().map(|f| {
+            let direction = V::from_slice(&f.direction);
+            let centre = (domain_min + domain_max) * 0.5;
+            bisph_core::forcing::FluxControl {
+                direction: direction / direction.length(),
+                target_velocity: f.flux / f.area,
+                area: f.area,
+                slice_point: f.slice_point.as_deref().map_or(centre, V::from_slice),
+                slice_width: f.slice_width.unwrap_or(2.0 * dx),
+                rule: match f.rule {
+                    crate::case::FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
+                    crate::case::FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
+                },
+            }
+        }),
         integrator: Integrator::Verlet,
         // set below, once the initial energies are known
     };

@@ -159,6 +159,10 @@ pub struct FluidSection {
     /// Hydrostatic correction of the density diffusion (delta-SPH, or paper 3 eq 81).
     #[serde(default = "yes")]
     pub delta_hydrostatic: bool,
+    /// Kinematic viscosity `nu` [m^2/s] (0 = inviscid): the Morris Laplacian with the laminar
+    /// wall shear (paper 3, eqs 18-20).
+    #[serde(default)]
+    pub viscosity: f64,
     /// Density diffusion form.
     #[serde(default)]
     pub diffusion: DiffusionName,
@@ -168,6 +172,36 @@ pub struct FluidSection {
     /// Multiplier of Ferrari's diffusion term.
     #[serde(default = "one")]
     pub ferrari_coefficient: f64,
+}
+
+/// `[flux]`: a driving body force imposing a volume flux (paper 3, section 5).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FluxSection {
+    /// Volume flux `Q` to impose [m^3/s, m^2/s in 2-D].
+    pub flux: f64,
+    /// Cross-section area `A` [m^2, m in 2-D]; the target bulk velocity is `Q / A`.
+    pub area: f64,
+    /// Flow direction (`dim` numbers; normalised).
+    pub direction: Vec<f64>,
+    /// A point on the measuring slice (default: the domain centre).
+    pub slice_point: Option<Vec<f64>>,
+    /// Slice width (default `2 dx`, as in the paper).
+    pub slice_width: Option<f64>,
+    /// `"eq63"` (paper 3, the default) or `"eq58"` (Violeau).
+    #[serde(default)]
+    pub rule: FluxRuleName,
+}
+
+/// Flux update rule name.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FluxRuleName {
+    /// Paper 3 eq 63.
+    #[default]
+    Eq63,
+    /// Paper 3 eq 58.
+    Eq58,
 }
 
 fn default_eta() -> f64 {
@@ -418,6 +452,20 @@ pub struct DomainSection {
     pub min: Vec<f64>,
     /// Upper corner.
     pub max: Vec<f64>,
+    /// Periodic axes (`"x"`, `"y"`, `"z"`): the period along each is the domain's extent
+    /// `max - min`; particles leaving one side come back on the other.
+    #[serde(default)]
+    pub periodic: Vec<String>,
+}
+
+impl DomainSection {
+    /// Indices of the periodic axes (unknown names are rejected by `check_case`).
+    pub fn periodic_axes(&self) -> Vec<usize> {
+        self.periodic
+            .iter()
+            .filter_map(|a| ["x", "y", "z"].iter().position(|n| n == a))
+            .collect()
+    }
 }
 
 /// Initial pressure of a fluid block: `"hydrostatic"` or a number [Pa].
@@ -816,6 +864,8 @@ pub struct Case {
     pub diagnostics: DiagnosticsSection,
     /// Domain.
     pub domain: Option<DomainSection>,
+    /// Flux-driven forcing.
+    pub flux: Option<FluxSection>,
     /// Fluid blocks.
     #[serde(default)]
     pub fluid_block: Vec<FluidBlock>,
@@ -1115,6 +1165,37 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("expected a value in [0, 1], found {}", c.fluid.delta),
         );
     }
+    if !(c.fluid.viscosity >= 0.0 && c.fluid.viscosity.is_finite()) {
+        return e(
+            "fluid.viscosity",
+            format!(
+                "expected zero or a positive kinematic viscosity, found {}",
+                c.fluid.viscosity
+            ),
+        );
+    }
+    if let Some(f) = &c.flux {
+        if !f.flux.is_finite() {
+            return e("flux.flux", "expected a finite number".into());
+        }
+        positive("flux.area", f.area)?;
+        vector(loaded, "flux.direction", &f.direction, d)?;
+        if f.direction.iter().all(|x| *x == 0.0) {
+            return e("flux.direction", "expected a non-zero vector".into());
+        }
+        if let Some(p) = &f.slice_point {
+            vector(loaded, "flux.slice_point", p, d)?;
+        }
+        if let Some(w) = f.slice_width {
+            positive("flux.slice_width", w)?;
+        }
+        if c.domain.as_ref().is_none_or(|dom| dom.periodic.is_empty()) {
+            return e(
+                "flux",
+                "a flux-driven flow needs a periodic [domain] (domain.periodic)".into(),
+            );
+        }
+    }
     if !(c.fluid.eta.is_finite() && c.fluid.eta > 0.0) {
         return e(
             "fluid.eta",
@@ -1338,6 +1419,29 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         vector(loaded, "domain.max", &dom.max, d)?;
         if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
             return e("domain", "expected min < max in every direction".into());
+        }
+        let names = &["x", "y", "z"][..d];
+        for (k, a) in dom.periodic.iter().enumerate() {
+            let Some(axis) = names.iter().position(|n| n == a) else {
+                return e(
+                    "domain.periodic",
+                    format!("expected axes among {names:?}, found \"{a}\""),
+                );
+            };
+            if dom.periodic[..k].contains(a) {
+                return e("domain.periodic", format!("axis \"{a}\" is listed twice"));
+            }
+            let support = 2.0 * c.resolution.h_over_dx * c.resolution.dx;
+            let period = dom.max[axis] - dom.min[axis];
+            if period < 3.0 * support {
+                return e(
+                    "domain.periodic",
+                    format!(
+                        "the period along {a} (domain extent {period}) must be at least three kernel supports ({})",
+                        3.0 * support
+                    ),
+                );
+            }
         }
     }
     check_pack(loaded)?;

@@ -18,11 +18,13 @@
 //! by cell, and sums run in memory order, so the order is part of the state), the wall elements'
 //! moving geometry, velocities and pressures, the pistons, the integrator history (rates of the
 //! last evaluation, which the midpoint scheme uses as its first guess and Verlet as its first
-//! kick), the energy accumulators, and the run loop's counters (next output times, frames,
+//! kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
+//! controller's memory and driving force, and the run loop's counters (next output times, frames,
 //! CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
 //! configuration) are rebuilt from the case text stored in the checkpoint.
 
 use crate::output::OutputError;
+use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
 use bisph_core::walls::Motion;
 use bisph_core::{Simulation, Vector};
@@ -31,7 +33,7 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// File name of the checkpoint in an output directory.
@@ -120,6 +122,16 @@ pub struct SimState<V: Vector> {
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
     pub wall_power: f64,
+    /// Cumulative viscous dissipation.
+    pub viscous_dissipation: f64,
+    /// Viscous dissipation rate at the last rate evaluation.
+    pub viscous_power: f64,
+    /// Cumulative work of the driving force.
+    pub forcing_work: f64,
+    /// Current driving acceleration of the flux control.
+    pub body_force: V,
+    /// The flux controller's memory.
+    pub flux_history: FluxHistory,
     /// Midpoint iterations of the last step.
     pub last_iterations: u32,
     /// Midpoint residue of the last step.
@@ -156,6 +168,11 @@ impl<V: Vector> SimState<V> {
         self.last_dt = sim.last_dt;
         self.wall_work = sim.wall_work;
         self.wall_power = sim.wall_power;
+        self.viscous_dissipation = sim.viscous_dissipation;
+        self.viscous_power = sim.viscous_power;
+        self.forcing_work = sim.forcing_work;
+        self.body_force = sim.body_force;
+        self.flux_history = sim.flux_history;
         self.last_iterations = sim.last_iterations;
         self.last_residue = sim.last_residue;
         self.placed_at = sim.walls.placed_at;
@@ -308,6 +325,12 @@ impl<V: Vector> SimState<V> {
                 self.last_dt,
                 self.wall_work,
                 self.wall_power,
+                self.viscous_dissipation,
+                self.viscous_power,
+                self.forcing_work,
+                self.flux_history.last,
+                self.flux_history.before_last,
+                self.flux_history.force,
                 self.last_residue,
                 self.placed_at,
             ]
@@ -333,6 +356,11 @@ impl<V: Vector> SimState<V> {
         sim.last_dt = self.last_dt;
         sim.wall_work = self.wall_work;
         sim.wall_power = self.wall_power;
+        sim.viscous_dissipation = self.viscous_dissipation;
+        sim.viscous_power = self.viscous_power;
+        sim.forcing_work = self.forcing_work;
+        sim.body_force = self.body_force;
+        sim.flux_history = self.flux_history;
         sim.last_iterations = self.last_iterations;
         sim.last_residue = self.last_residue;
         sim.walls.placed_at = self.placed_at;
@@ -370,8 +398,19 @@ impl<V: Vector> SimState<V> {
     }
 }
 
+/// Columns of `energy.csv` (and of the energy history a checkpoint keeps).
+pub const ENERGY_COLUMNS: usize = 8;
+
+/// Exactly one vector, from a list.
+fn single<V: Vector>(v: Vec<V>) -> Result<V, String> {
+    match v[..] {
+        [x] => Ok(x),
+        _ => Err(format!("expected one vector, found {}", v.len())),
+    }
+}
+
 /// Number of CSV series whose lengths a checkpoint keeps.
-pub const SERIES: usize = 5;
+pub const SERIES: usize = 6;
 /// Their file names, in the order of [`RunCounters::csv_lengths`].
 pub const SERIES_FILES: [&str; SERIES] = [
     "energy.csv",
@@ -379,6 +418,7 @@ pub const SERIES_FILES: [&str; SERIES] = [
     "probes.csv",
     "bodies.csv",
     "midpoint.csv",
+    "flux.csv",
 ];
 
 /// The run loop's own state (outputs and running statistics).
@@ -452,7 +492,7 @@ pub struct Checkpoint<V: Vector> {
     /// The run loop's counters.
     pub run: RunCounters,
     /// Rows of `energy.csv` so far (for the plots).
-    pub history: Vec<[f64; 6]>,
+    pub history: Vec<[f64; ENERGY_COLUMNS]>,
     /// Rows of `probes.csv` so far (for the plots).
     pub probe_history: Vec<Vec<f64>>,
 }
@@ -575,6 +615,13 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64(s.last_dt);
     w.f64(s.wall_work);
     w.f64(s.wall_power);
+    w.f64(s.viscous_dissipation);
+    w.f64(s.viscous_power);
+    w.f64(s.forcing_work);
+    w.vectors(&[s.body_force]);
+    w.f64(s.flux_history.last);
+    w.f64(s.flux_history.before_last);
+    w.f64(s.flux_history.force);
     w.u32(s.last_iterations);
     w.f64(s.last_residue);
     w.f64(s.placed_at);
@@ -645,6 +692,15 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         last_dt: r.f64()?,
         wall_work: r.f64()?,
         wall_power: r.f64()?,
+        viscous_dissipation: r.f64()?,
+        viscous_power: r.f64()?,
+        forcing_work: r.f64()?,
+        body_force: single(r.vectors()?)?,
+        flux_history: FluxHistory {
+            last: r.f64()?,
+            before_last: r.f64()?,
+            force: r.f64()?,
+        },
         last_iterations: r.u32()?,
         last_residue: r.f64()?,
         placed_at: r.f64()?,
@@ -694,10 +750,10 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
     }
     run.wall_seconds = r.f64()?;
     run.dt0 = r.f64()?;
-    let n = r.len(48)?;
+    let n = r.len(8 * ENERGY_COLUMNS)?;
     let mut history = Vec::with_capacity(n);
     for _ in 0..n {
-        let mut row = [0.0; 6];
+        let mut row = [0.0; ENERGY_COLUMNS];
         for x in row.iter_mut() {
             *x = r.f64()?;
         }
@@ -849,8 +905,12 @@ mod tests {
         c.sim.corners = vec![DVec2::ZERO, DVec2::X];
         c.sim.pistons = vec![(1, 0.1, -0.2, 0.3)];
         c.run.frame_times = vec![0.0, 0.1];
-        c.run.csv_lengths = [10, 20, 30, 0, 0];
-        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN]];
+        c.run.csv_lengths = [10, 20, 30, 0, 0, 40];
+        c.sim.viscous_dissipation = 0.5;
+        c.sim.forcing_work = 0.75;
+        c.sim.body_force = DVec2::new(1e-3, 0.0);
+        c.sim.flux_history.last = 0.9;
+        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0]];
         c.probe_history = vec![vec![0.0, 1.0], vec![0.1, 2.0]];
         c
     }

@@ -17,6 +17,7 @@ pub mod pack_cases;
 pub mod paper1_cases;
 pub mod paper2_cases;
 pub mod paper3_cases;
+pub mod paper3_flow_cases;
 pub mod plot;
 pub mod regions;
 pub mod resources;

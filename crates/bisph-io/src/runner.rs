@@ -276,6 +276,7 @@ const FORCES: usize = 1;
 const PROBES: usize = 2;
 const BODIES: usize = 3;
 const MIDPOINT: usize = 4;
+const FLUX: usize = 5;
 
 /// Builds and runs a case, writing `energy.csv`, `forces.csv`, `probes.csv`, VTK frames,
 /// `summary.json`, plots and a copy of the case into `out`; checkpoints into
@@ -326,6 +327,8 @@ pub fn run<V: CaseDim>(
                 "potential",
                 "wall_work",
                 "total",
+                "viscous_dissipation",
+                "forcing_work",
             ]
             .map(String::from)
             .to_vec(),
@@ -345,6 +348,17 @@ pub fn run<V: CaseDim>(
             .to_vec()
         }),
         midpoint.map(|_| ["t", "iterations", "residue"].map(String::from).to_vec()),
+        sim.config.flux.map(|_| {
+            [
+                "t",
+                "bulk_velocity",
+                "target_velocity",
+                "force",
+                "relative_error",
+            ]
+            .map(String::from)
+            .to_vec()
+        }),
     ];
     // Free bodies: one CSV each, and the fluid + bodies energy watched for the summary.
     let mut free_csv = Vec::new();
@@ -376,7 +390,7 @@ pub fn run<V: CaseDim>(
     let mut fluid_body_max: f64 = 0.0;
 
     let mut counters;
-    let mut history: Vec<[f64; 6]>;
+    let mut history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>;
     let mut probe_history: Vec<Vec<f64>>;
     let mut outputs = Outputs {
         series: Default::default(),
@@ -462,7 +476,7 @@ pub fn run<V: CaseDim>(
     let mut trip: Option<Diagnosis> = None;
     let write_checkpoint = |good: &SimState<V>,
                             counters: &RunCounters,
-                            history: &[[f64; 6]],
+                            history: &[[f64; checkpoint::ENERGY_COLUMNS]],
                             probe_history: &[Vec<f64>]|
      -> Result<(), OutputError> {
         let c = Checkpoint {
@@ -501,9 +515,34 @@ pub fn run<V: CaseDim>(
                 e.potential,
                 e.wall_work,
                 e.total,
+                e.viscous_dissipation,
+                e.forcing_work,
             ];
             if let Some(csv) = outputs.get(ENERGY) {
                 csv.row(&row)?;
+            }
+            if let Some(flux) = sim.config.flux {
+                let bulk = sim.bulk_velocity();
+                let target = flux.target_velocity;
+                if let Some(csv) = outputs.get(FLUX) {
+                    csv.row(&[
+                        t,
+                        bulk,
+                        target,
+                        sim.flux_history.force,
+                        (bulk - target) / target,
+                    ])?;
+                }
+                // The driving force on the whole fluid, `F sum_i m_i`.
+                let total_mass: f64 = sim.fluid.mass.iter().sum();
+                let force = sim.body_force * total_mass;
+                let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
+                if V::DIM == 3 {
+                    values.extend([0.0; 3]);
+                }
+                if let Some(csv) = outputs.get(FORCES) {
+                    csv.named_row(t, "driving", &values)?;
+                }
             }
             history.push(row);
             for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
@@ -702,19 +741,33 @@ pub fn run<V: CaseDim>(
 
 fn write_plots(
     out: &Path,
-    history: &[[f64; 6]],
+    history: &[[f64; 8]],
     probe_header: &[String],
     probes: &[Vec<f64>],
 ) -> Result<(), OutputError> {
     let column = |k: usize| history.iter().map(|r| r[k]).collect::<Vec<f64>>();
     let t = column(0);
     let e0 = history.first().map(|r| r[5]).unwrap_or(0.0);
-    let names = ["kinetic", "compressible", "potential", "wall_work", "total"];
-    let series = names
+    let all = [
+        "kinetic",
+        "compressible",
+        "potential",
+        "wall_work",
+        "total",
+        "viscous_dissipation",
+        "forcing_work",
+    ];
+    // Columns 6 and 7 only when they are used; `k + 1` is the column of `all[k]`.
+    let shown: Vec<(usize, &str)> = all
         .iter()
+        .copied()
         .enumerate()
-        .map(|(k, name)| {
-            let base = if *name == "potential" || *name == "total" {
+        .filter(|&(k, _)| k < 5 || history.iter().any(|r| r[k + 1] != 0.0))
+        .collect();
+    let series = shown
+        .iter()
+        .map(|&(k, name)| {
+            let base = if name == "potential" || name == "total" {
                 history.first().map(|r| r[k + 1]).unwrap_or(0.0)
             } else {
                 0.0

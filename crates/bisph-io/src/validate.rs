@@ -138,6 +138,7 @@ pub fn registry() -> Vec<Box<dyn ValidationCase>> {
     cases.extend(crate::paper1_cases::cases());
     cases.extend(crate::paper2_cases::cases());
     cases.extend(crate::paper3_cases::cases());
+    cases.extend(crate::paper3_flow_cases::cases());
     cases.extend(crate::pack_cases::cases());
     cases.extend(crate::rigid_cases::cases());
     cases

@@ -307,7 +307,7 @@ fn checkpoint_bytes() -> (Vec<u8>, bisph_io::LoadedCase) {
             frame_times: vec![0.0],
             ..Default::default()
         },
-        history: vec![[0.0; 6]; 3],
+        history: vec![[0.0; checkpoint::ENERGY_COLUMNS]; 3],
         probe_history: vec![vec![0.0, 1.0]; 3],
     };
     (checkpoint::encode(&c), loaded)

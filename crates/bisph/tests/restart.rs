@@ -86,6 +86,19 @@ const DAM_BREAK_3D: Case = Case {
     checkpoint_steps: "5",
 };
 
+const POISEUILLE: Case = Case {
+    name: "poiseuille",
+    file: "poiseuille-flux.toml",
+    sets: &[
+        "time.end=0.08",
+        "output.vtk_interval=0.04",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "flux.csv",
+    checkpoint_steps: "7",
+};
+
 fn fresh_args(case: &Case, out: &Path) -> Vec<String> {
     let mut a = vec![
         "run".to_string(),
@@ -261,6 +274,16 @@ fn killed_3d_run_resumes_bit_identically() {
     let (kills, resumes) = kill_resume_compare(&DAM_BREAK_3D, 0x5eed_0003, 1, 2);
     eprintln!("3-D: {kills} SIGKILLs, {resumes} resumes");
     assert!(resumes >= 1);
+}
+
+/// Periodic flux-driven Poiseuille flow with viscosity (paper 3, eq 63): the controller's
+/// memory, the driving force and the viscous and forcing energy books are part of the
+/// checkpoint; `flux.csv` resumes like the other series.
+#[test]
+fn killed_flux_run_resumes_bit_identically() {
+    let (kills, resumes) = kill_resume_compare(&POISEUILLE, 0x5eed_0004, 2, 2);
+    eprintln!("poiseuille-flux: {kills} SIGKILLs, {resumes} resumes");
+    assert!(resumes >= 2);
 }
 
 /// SIGTERM: the run finishes its step, writes a checkpoint, exits with code 10 and its

@@ -133,6 +133,7 @@ impl<V: Vector> Simulation<V> {
         self.last_iterations = iterations;
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;
+        self.viscous_dissipation += dt * self.viscous_power;
         // Bodies: drift with the midpoint velocities, then V^{n+1} = V^n + dt A.
         let body_acceleration = self.walls.dynamic_accelerations();
         for (k, v) in body_velocity.iter_mut().enumerate() {
@@ -190,6 +191,7 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(f.density_rate.par_iter())
             .for_each(|(rho, &d)| *rho += d * dt);
+        self.wrap_positions();
         self.time += dt;
         self.step += 1;
         self.last_dt = dt;

@@ -11,11 +11,14 @@ use crate::dim::Vector;
 use crate::energy::{fluid_energies, EnergyBudget};
 use crate::eos::Eos;
 use crate::error::SimError;
+use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
-use crate::terms::{compute_rates, particle_operators, DensityDiffusion, DiffusionForm, RateModel};
+use crate::terms::{
+    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, RateModel, Viscosity,
+};
 use crate::walls::energy_bi::EnergyConservingWalls;
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
 use crate::walls::usaw::{self, UsawWalls, Vertices, WallInterpolation};
@@ -137,6 +140,12 @@ pub struct SimConfig<V: Vector> {
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
+    /// Periodic axes (the period along an axis is the domain's extent there).
+    pub periodicity: Periodicity<V>,
+    /// Laminar viscosity (paper 3 eqs 18-20; off when `nu = 0`).
+    pub viscosity: Viscosity,
+    /// A driving force imposing a volume flux (paper 3, section 5).
+    pub flux: Option<FluxControl<V>>,
     /// Density diffusion form (its hydrostatic correction is [`SimConfig::delta_hydrostatic`]).
     pub diffusion: DiffusionChoice,
     /// The density power `k` of paper 3, eqs 37-38 (0 or 1).
@@ -154,6 +163,7 @@ struct Scratch<V> {
     velocity: Vec<V>,
     density: Vec<f64>,
     volume: Vec<f64>,
+    viscous_power: Vec<f64>,
     lost_energy: Vec<f64>,
     previous_acceleration: Vec<V>,
     previous_density_rate: Vec<f64>,
@@ -182,6 +192,16 @@ pub struct Simulation<V: Vector> {
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
     pub wall_power: f64,
+    /// Cumulative viscous dissipation `int sum_i -m_i u_i . a_i^visc dt`.
+    pub viscous_dissipation: f64,
+    /// Viscous dissipation rate at the last rate evaluation.
+    pub viscous_power: f64,
+    /// Cumulative work of the driving force, `int F . sum_i m_i u_i dt`.
+    pub forcing_work: f64,
+    /// Current driving acceleration (zero without flux control).
+    pub body_force: V,
+    /// The flux controller's memory (bulk velocities and last force).
+    pub flux_history: FluxHistory,
     /// Fixed-point iterations of the last midpoint step (1 for Verlet).
     pub last_iterations: u32,
     /// Final energy residue (paper 1, eq 53) of the last midpoint step (0 for Verlet).
@@ -195,6 +215,10 @@ pub struct Simulation<V: Vector> {
 
 impl<V: Vector> Simulation<V> {
     /// Sets up a simulation and evaluates the rates at time zero.
+    ///
+    /// # Panics
+    /// When a period of `config.periodicity` holds fewer than three kernel supports (check it
+    /// first with [`CellGrid::with_period`]).
     pub fn new(
         config: SimConfig<V>,
         fluid: Fluid<V>,
@@ -212,13 +236,25 @@ impl<V: Vector> Simulation<V> {
             last_dt: 0.0,
             wall_work: 0.0,
             wall_power: 0.0,
+            viscous_dissipation: 0.0,
+            viscous_power: 0.0,
+            forcing_work: 0.0,
+            body_force: V::ZERO,
+            flux_history: FluxHistory::default(),
             last_iterations: 0,
             last_residue: 0.0,
             fluid_grid: CellGrid::new(cell),
             timings: PhaseTimes::default(),
             scratch: Scratch::default(),
         };
-        sim.walls.grid = CellGrid::new(cell);
+        let period = sim.config.periodicity;
+        let grid = CellGrid::with_period(cell, period)
+            .expect("periods must hold three kernel supports (checked by the caller)");
+        sim.fluid_grid = grid.clone();
+        sim.walls.grid = grid;
+        sim.walls.periodicity = period;
+        sim.walls.wrap_elements();
+        sim.wrap_positions();
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
         if let WallModelChoice::Usaw(_) = sim.config.wall_model {
@@ -247,7 +283,56 @@ impl<V: Vector> Simulation<V> {
         sim.evaluate_rates();
         sim.store_body_accelerations(true);
         sim.refresh_pressure();
+        let bulk = sim.bulk_velocity();
+        sim.flux_history = FluxHistory {
+            last: bulk,
+            before_last: bulk,
+            force: 0.0,
+        };
         sim
+    }
+
+    /// Bulk velocity over the flux controller's slice (paper 3 eqs 56-57; 0 without one).
+    pub fn bulk_velocity(&self) -> f64 {
+        let Some(flux) = &self.config.flux else {
+            return 0.0;
+        };
+        let f = &self.fluid;
+        flux.bulk_velocity(
+            &f.position,
+            &f.velocity,
+            &f.mass,
+            &f.density,
+            &self.config.periodicity,
+        )
+    }
+
+    /// Total momentum `sum_i m_i u_i` (summed in particle-id order: the same bits for any
+    /// thread count and memory order).
+    pub fn momentum(&self) -> V {
+        let f = &self.fluid;
+        let mut by_id = vec![V::ZERO; f.len()];
+        for i in 0..f.len() {
+            by_id[f.id[i] as usize] = f.velocity[i] * f.mass[i];
+        }
+        by_id.into_iter().fold(V::ZERO, |a, b| a + b)
+    }
+
+    /// Sets the driving acceleration of the coming step of size `dt` (eq 58 or 63), moving
+    /// the stored accelerations along with it.
+    fn update_flux_force(&mut self, dt: f64) {
+        let Some(flux) = self.config.flux else {
+            return;
+        };
+        let force = flux.next_force(&self.flux_history, dt);
+        let new = flux.direction * force;
+        let change = new - self.body_force;
+        self.fluid
+            .acceleration
+            .par_iter_mut()
+            .for_each(|a| *a += change);
+        self.body_force = new;
+        self.flux_history.force = force;
     }
 
     /// Fills the evaluation state (scratch velocities and densities) with
@@ -382,8 +467,21 @@ impl<V: Vector> Simulation<V> {
                 hydrostatic_gradient,
                 form,
             },
+            viscosity: c.viscosity,
+            body_force: self.body_force,
             density_power: c.density_power,
             summation_density: self.summation(),
+        }
+    }
+
+    /// Brings every particle back into the primary period along the periodic axes.
+    pub(crate) fn wrap_positions(&mut self) {
+        let period = self.config.periodicity;
+        if period.any() {
+            self.fluid
+                .position
+                .par_iter_mut()
+                .for_each(|r| *r = period.wrap(*r));
         }
     }
 
@@ -431,6 +529,8 @@ impl<V: Vector> Simulation<V> {
             .for_each(|(p, &rho)| *p = eos.pressure(rho));
         let volume = &mut self.scratch.volume;
         volume.resize(mass.len(), 0.0);
+        let viscous_power = &mut self.scratch.viscous_power;
+        viscous_power.resize(mass.len(), 0.0);
         volume
             .par_iter_mut()
             .zip(mass.par_iter().zip(self.scratch.density.par_iter()))
@@ -454,13 +554,23 @@ impl<V: Vector> Simulation<V> {
                 walls,
                 acceleration,
                 density_rate,
+                viscous_power,
             ),
             WallModelChoice::ShepardBi(shepard) => {
                 let bi = ShepardWalls {
                     gravity: model.gravity,
                     shepard,
                 };
-                sweep(&model, &bi, &state, grid, walls, acceleration, density_rate)
+                sweep(
+                    &model,
+                    &bi,
+                    &state,
+                    grid,
+                    walls,
+                    acceleration,
+                    density_rate,
+                    viscous_power,
+                )
             }
             WallModelChoice::Usaw(params) => {
                 let wall_start = Instant::now();
@@ -493,9 +603,16 @@ impl<V: Vector> Simulation<V> {
                     wall_grid,
                     acceleration,
                     density_rate,
+                    viscous_power,
                 );
                 wall_seconds
             }
+        };
+        self.viscous_power = if model.viscosity.active() {
+            let p = &self.scratch.viscous_power;
+            crate::energy::deterministic_sum(p.len(), |i| p[i])
+        } else {
+            0.0
         };
         self.wall_power = self.walls.power();
         self.timings.rates += start.elapsed().as_secs_f64();
@@ -593,7 +710,13 @@ impl<V: Vector> Simulation<V> {
         if a_max > 0.0 {
             dt = dt.min((h / a_max).sqrt());
         }
-        self.config.courant * dt
+        dt *= self.config.courant;
+        let nu = self.config.viscosity.nu;
+        if nu > 0.0 {
+            // Viscous diffusion limit (Morris et al. 1997).
+            dt = dt.min(0.125 * h * h / nu);
+        }
+        dt
     }
 
     /// Advances one step of size `next_dt()` (never past `t_end` when given).
@@ -612,9 +735,22 @@ impl<V: Vector> Simulation<V> {
             });
         }
         let start = Instant::now();
+        let forced = self.config.flux.is_some();
+        self.update_flux_force(dt);
+        let momentum_before = if forced { self.momentum() } else { V::ZERO };
         match self.config.integrator {
             Integrator::Verlet => self.verlet_step(dt)?,
             Integrator::Midpoint(params) => self.midpoint_step(dt, &params)?,
+        }
+        if forced {
+            // A uniform force changes the kinetic energy by exactly F . (P^n + P^{n+1}) dt / 2.
+            let momentum_after = self.momentum();
+            self.forcing_work += 0.5 * dt * self.body_force.dot(momentum_before + momentum_after);
+        }
+        if self.config.flux.is_some() {
+            let bulk = self.bulk_velocity();
+            self.flux_history.before_last = self.flux_history.last;
+            self.flux_history.last = bulk;
         }
         self.timings.steps += start.elapsed().as_secs_f64();
         self.check_state()
@@ -677,7 +813,10 @@ impl<V: Vector> Simulation<V> {
             compressible,
             potential,
             wall_work: self.wall_work,
-            total: kinetic + compressible + potential + self.wall_work,
+            viscous_dissipation: self.viscous_dissipation,
+            forcing_work: self.forcing_work,
+            total: kinetic + compressible + potential + self.wall_work + self.viscous_dissipation
+                - self.forcing_work,
         }
     }
 
@@ -754,6 +893,7 @@ pub(crate) fn advance_gamma<V: Vector>(
 
 /// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall
 /// pressures.
+#[allow(clippy::too_many_arguments)]
 fn sweep<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
@@ -762,6 +902,7 @@ fn sweep<V: Vector, W: WallModel<V>>(
     walls: &mut Walls<V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
+    viscous_power: &mut [f64],
 ) -> f64 {
     let start = Instant::now();
     wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
@@ -775,6 +916,7 @@ fn sweep<V: Vector, W: WallModel<V>>(
         &walls.grid,
         acceleration,
         density_rate,
+        viscous_power,
     );
     wall_seconds
 }

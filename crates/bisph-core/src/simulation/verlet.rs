@@ -58,7 +58,9 @@ impl<V: Vector> Simulation<V> {
         }
         self.walls.set_dynamic_velocities(&body_velocity);
         self.walls.drift_bodies(dt);
+        self.wrap_positions();
         let power_before = self.wall_power;
+        let viscous_before = self.viscous_power;
         self.time += dt;
         self.step += 1;
         self.last_dt = dt;
@@ -104,6 +106,7 @@ impl<V: Vector> Simulation<V> {
             }
         }
         self.wall_work += half * (power_before + self.wall_power);
+        self.viscous_dissipation += half * (viscous_before + self.viscous_power);
         self.refresh_pressure();
         self.last_iterations = 1;
         self.last_residue = 0.0;

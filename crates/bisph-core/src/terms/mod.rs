@@ -3,12 +3,15 @@
 //! Each term lives in its own file as a pair function; [`compute_rates`] fuses them into one
 //! gather loop per particle (each particle sums its own neighbours, so the result does not
 //! depend on the number of threads) and asks the wall model for the wall parts:
-//! - momentum, paper 1 eq 2: `du_i/dt = -(<grad p>_i^Omega + <grad p>_i^{dOmega}) / rho_i + g`;
+//! - momentum, paper 1 eq 2: `du_i/dt = -(<grad p>_i^Omega + <grad p>_i^{dOmega}) / rho_i + g`,
+//!   plus the laminar viscosity of paper 3 eq 18 with its wall shear ([`viscosity`]) and a
+//!   uniform driving body force (the flux control of paper 3, section 5);
 //! - continuity, paper 1 eq 1: `drho_i/dt = -rho_i (<div u>_i^Omega + <div u>_i^{dOmega}) + D_i`.
 
 pub mod density_diffusion;
 pub mod pressure_gradient;
 pub mod velocity_divergence;
+pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
@@ -17,6 +20,7 @@ use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
 use rayon::prelude::*;
+pub use viscosity::Viscosity;
 
 /// The operators of one particle, split into fluid and wall parts (for power bookkeeping).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -31,6 +35,10 @@ pub struct Operators<V> {
     pub wall_velocity_divergence: f64,
     /// Density diffusion `D_i`.
     pub density_diffusion: f64,
+    /// Viscous acceleration, fluid part (paper 3 eq 18).
+    pub viscous: V,
+    /// Viscous acceleration, wall part (wall shear, paper 3 eqs 18-20).
+    pub wall_viscous: V,
 }
 
 /// What the sweep needs besides the state.
@@ -42,6 +50,11 @@ pub struct RateModel<V: Vector> {
     pub gravity: V,
     /// Density diffusion (delta-SPH or paper 3's volume diffusion).
     pub diffusion: DensityDiffusion<V>,
+    /// Laminar viscosity (off when `nu = 0`).
+    pub viscosity: Viscosity,
+    /// Uniform driving acceleration (e.g. the flux control of paper 3, section 5), added to
+    /// every particle like gravity but booked apart in the energy.
+    pub body_force: V,
     /// The density power `k` of paper 3, eqs 37-38 (0: paper 1, eqs 10-11; or 1).
     pub density_power: u8,
     /// Density by summation (paper 3, eqs 13 and 84): the sweep's density rate is then the
@@ -71,7 +84,10 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let mut div_u = 0.0;
     let mut diffusion = 0.0;
     let mut shepard = 0.0;
+    let mut viscous = V::ZERO;
     let diffuse = model.diffusion.scale != 0.0;
+    let viscosity = model.viscosity;
+    let viscid = viscosity.active();
     let discrete_shepard = W::RENORMALISE && wall_model.needs_discrete_shepard();
     let weighted = model.density_power != 0;
     fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
@@ -91,6 +107,9 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
                 .diffusion
                 .pair(rho_i, fluid.density[j], r_ij, r, f, volume_j);
         }
+        if viscid {
+            viscous += viscosity.pair(u_i, fluid.velocity[j], rho_i, fluid.density[j], f, volume_j);
+        }
         if discrete_shepard {
             shepard += kernel.value(r) * volume_j;
         }
@@ -102,6 +121,11 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         rho: rho_i,
     };
     let wall = wall_model.particle_terms(kernel, &view, elements, wall_grid);
+    let wall_viscous = if viscid {
+        wall_model.wall_viscous(kernel, &viscosity, x_i, u_i, elements, wall_grid)
+    } else {
+        V::ZERO
+    };
     let gamma = if W::RENORMALISE {
         wall_model.renormalisation(kernel, x_i, shepard, fluid.gamma[i], elements, wall_grid)
     } else {
@@ -112,6 +136,8 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         let scale = 1.0 / gamma;
         let total_grad = (grad_p + wall.pressure_gradient) * scale;
         let total_div = (div_u + wall.velocity_divergence) * scale;
+        // Paper 3 eq 18: the Laplacian (fluid and wall sums) over gamma as well.
+        let total_viscous = (viscous + wall_viscous) * scale;
         return Operators {
             pressure_gradient: grad_p,
             velocity_divergence: div_u,
@@ -122,19 +148,37 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
             } else {
                 diffusion
             },
+            viscous,
+            wall_viscous: total_viscous - viscous,
         };
     }
+    // Paper 3 eq 18 divides the Laplacian by gamma_i, the kernel's integral over the fluid;
+    // models that do not renormalise take it from the wall geometry (paper 2), which is
+    // exactly 1 away from walls, so fluid pairs there stay antisymmetric.
+    let (viscous, wall_viscous) = if viscid {
+        let gamma = crate::walls::geometric_shepard::gamma(kernel, x_i, elements, wall_grid);
+        if gamma > 0.0 && gamma != 1.0 {
+            (viscous / gamma, wall_viscous / gamma)
+        } else {
+            (viscous, wall_viscous)
+        }
+    } else {
+        (viscous, wall_viscous)
+    };
     Operators {
         pressure_gradient: grad_p,
         velocity_divergence: div_u,
         wall_pressure_gradient: wall.pressure_gradient,
         wall_velocity_divergence: wall.velocity_divergence,
         density_diffusion: diffusion,
+        viscous,
+        wall_viscous,
     }
 }
 
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
-/// into `acceleration` and `density_rate`, in parallel.
+/// into `acceleration` and `density_rate`, in parallel; `viscous_power` receives each
+/// particle's viscous dissipation `-m_i u_i . a_i^visc` (zero without viscosity).
 #[allow(clippy::too_many_arguments)]
 pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -145,21 +189,29 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     wall_grid: &CellGrid<V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
+    viscous_power: &mut [f64],
 ) {
+    let body = model.gravity + model.body_force;
     acceleration
         .par_iter_mut()
-        .zip(density_rate.par_iter_mut())
+        .zip(
+            density_rate
+                .par_iter_mut()
+                .zip(viscous_power.par_iter_mut()),
+        )
         .enumerate()
         .with_min_len(256)
-        .for_each(|(i, (a, drho))| {
+        .for_each(|(i, (a, (drho, dissipation)))| {
             let op =
                 particle_operators(model, wall_model, fluid, fluid_grid, elements, wall_grid, i);
             let rho = fluid.density[i];
-            *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + model.gravity;
+            let viscous = op.viscous + op.wall_viscous;
+            *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;
             *drho = if model.summation_density {
                 op.density_diffusion
             } else {
                 -rho * (op.velocity_divergence + op.wall_velocity_divergence) + op.density_diffusion
             };
+            *dissipation = -fluid.mass[i] * fluid.velocity[i].dot(viscous);
         });
 }

@@ -50,9 +50,9 @@ pub fn elastic_bounce<V: Vector>(
         let before = e
             .as_deref()
             .map_or(d.length_squared(), |e| e.length_squared());
-        grid.for_each_candidate(x, |j| {
+        grid.for_each_candidate_shifted(x, |j, shift| {
             let n = elements.normal[j];
-            let r = elements.centre[j] - x;
+            let r = elements.centre[j] + shift - x;
             let normal_distance = r.dot(n);
             if normal_distance < 0.0 {
                 return; // behind this element's plane

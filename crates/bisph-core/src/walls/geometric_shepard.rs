@@ -256,8 +256,10 @@ pub fn gamma<V: Vector>(
     // point (rare) is moved and summed again.
     let sum_at = |x: V, shift: &mut V| {
         let mut gamma = 1.0;
-        grid.for_each_candidate_within(x, radius, |j| {
-            let r = elements.centre[j] - x;
+        // Periodic axes: the grid hands each element's image shift; the element's corners are
+        // stored at its own image, so the point is moved instead (minimum image).
+        grid.for_each_candidate_within_shifted(x, radius, |j, image| {
+            let r = elements.centre[j] + image - x;
             let reach = elements.reach[j];
             if r.length_squared() > (kernel.support + reach) * (kernel.support + reach) {
                 return;
@@ -268,7 +270,7 @@ pub fn gamma<V: Vector>(
             }
             gamma += V::wall_gamma_contribution(
                 kernel,
-                x,
+                x - image,
                 elements.current_corners(j),
                 elements.normal[j],
                 elements.area[j],

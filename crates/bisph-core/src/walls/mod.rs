@@ -12,8 +12,9 @@ pub mod usaw;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
+use crate::terms::Viscosity;
 pub use bodies::{Body, Coupling, FreeBody, Kinematics, Motion, Piston, PrescribedMotion};
 use glam::DVec3;
 
@@ -114,6 +115,9 @@ pub struct Walls<V: Vector> {
     pub placed_at: f64,
     /// Elements that stretch with a piston so their number stays constant.
     pub stretch: Vec<Stretch>,
+    /// Periodic axes: element centres are kept in the primary period (their corners move with
+    /// them), so an element straddling the period is seen from both sides through the grid.
+    pub periodicity: Periodicity<V>,
     /// Vertex particles of the semi-analytical walls (empty for the other models).
     pub vertices: usaw::Vertices<V>,
 }
@@ -143,6 +147,7 @@ impl<V: Vector> Walls<V> {
             grid: CellGrid::new(cell_size),
             placed_at: 0.0,
             stretch: Vec::new(),
+            periodicity: Periodicity::none(),
             vertices: usaw::Vertices::default(),
         };
         walls.grid.rebuild(&walls.elements.centre);
@@ -182,7 +187,26 @@ impl<V: Vector> Walls<V> {
             }
         }
         self.place_stretching(true);
+        self.wrap_elements();
         self.grid.rebuild(&self.elements.centre);
+    }
+
+    /// Moves every element whose centre left the primary period back by whole periods (its
+    /// corners with it).
+    pub fn wrap_elements(&mut self) {
+        if !self.periodicity.any() {
+            return;
+        }
+        let e = &mut self.elements;
+        for j in 0..e.len() {
+            let shift = self.periodicity.wrap(e.centre[j]) - e.centre[j];
+            if shift != V::ZERO {
+                e.centre[j] += shift;
+                for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
+                    e.corners[m] += shift;
+                }
+            }
+        }
     }
 
     /// Sets the element velocities of moving bodies to their values at time `t`, keeping the
@@ -464,6 +488,32 @@ pub trait WallModel<V: Vector>: Sync {
         _grid: &CellGrid<V>,
     ) -> f64 {
         discrete
+    }
+
+    /// Wall part of the viscous acceleration of a particle at `x` with velocity `u`: the
+    /// laminar wall shear of paper 3 eqs 18-20, [`Viscosity::wall_shear`] summed over the
+    /// elements with `|grad gamma_is| = W_is s_s` (one-point quadrature). Models with an
+    /// exact `grad gamma` override it.
+    fn wall_viscous(
+        &self,
+        kernel: &Wendland,
+        viscosity: &Viscosity,
+        x: V,
+        u: V,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> V {
+        let mut a = V::ZERO;
+        grid.for_each_neighbour(x, &elements.centre, kernel.support, |s, r_is, r| {
+            a += viscosity.wall_shear(
+                u,
+                elements.velocity[s],
+                r_is,
+                elements.normal[s],
+                kernel.value(r) * elements.area[s],
+            );
+        });
+        a
     }
 
     /// Wall sums for the fluid particle `a`.
