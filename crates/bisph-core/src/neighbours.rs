@@ -366,6 +366,24 @@ impl<V: Vector> CellGrid<V> {
         }
     }
 
+    /// The periodic branch of [`CellGrid::for_each_neighbour`].
+    #[inline(never)]
+    fn periodic_neighbours(
+        &self,
+        x: V,
+        points: &[V],
+        r2max: f64,
+        visit: &mut dyn FnMut(usize, V, f64),
+    ) {
+        self.for_each_in_periodic_span(x, 1, |j, shift| {
+            let r = points[j] + shift - x;
+            let r2 = r.length_squared();
+            if r2 < r2max {
+                visit(j, r, r2.sqrt());
+            }
+        });
+    }
+
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
     /// periodic axes) for every point with `|r_ij| < radius`.
     #[inline(always)]
@@ -378,13 +396,9 @@ impl<V: Vector> CellGrid<V> {
     ) {
         let r2max = radius * radius;
         if self.periodic {
-            self.for_each_in_periodic_span(x, 1, |j, shift| {
-                let r = points[j] + shift - x;
-                let r2 = r.length_squared();
-                if r2 < r2max {
-                    visit(j, r, r2.sqrt());
-                }
-            });
+            // Out of line and through a trait object, so that the caller's closure is
+            // instantiated (and inlined) once, in the non-periodic hot path below.
+            self.periodic_neighbours(x, points, r2max, &mut visit);
             return;
         }
         self.for_each_candidate(x, |j| {
