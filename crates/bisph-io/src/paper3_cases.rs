@@ -13,7 +13,7 @@
 
 use crate::build::build_simulation;
 use crate::case::parse_case;
-use crate::plot::{write_png, Plot, Series, Style};
+use crate::plot::line_plot_png as plot;
 use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::geometry::box_elements_2d;
 use bisph_core::neighbours::CellGrid;
@@ -22,7 +22,7 @@ use bisph_core::walls::{geometric_shepard, usaw};
 use bisph_core::{BoundaryElements, Simulation, Wendland};
 use glam::DVec2;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The paper-3 validation cases.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
@@ -32,29 +32,6 @@ pub fn cases() -> Vec<Box<dyn ValidationCase>> {
         Box::new(UsawStillWater),
         Box::new(UsawTankCorner),
     ]
-}
-
-fn plot(
-    out: &Path,
-    file: &str,
-    title: &str,
-    xl: &str,
-    yl: &str,
-    series: Vec<(String, Vec<f64>, Vec<f64>)>,
-) -> Result<PathBuf, String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let path = out.join(file);
-    let plot = Plot {
-        title: title.into(),
-        x_label: xl.into(),
-        y_label: yl.into(),
-        series: series
-            .into_iter()
-            .map(|(label, x, y)| (Series { label, x, y }, Style::Line))
-            .collect(),
-    };
-    write_png(&plot, &path, 1000, 600).map_err(|e| e.0)?;
-    Ok(PathBuf::from(file))
 }
 
 fn box_walls(

@@ -254,6 +254,31 @@ fn axis_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (mid - pad, mid + pad)
 }
 
+/// A PNG of labelled lines (1000 x 600) written as `out/file`; returns `file`, the path
+/// relative to `out` that a report links to.
+pub fn line_plot_png(
+    out: &Path,
+    file: &str,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    series: Vec<(String, Vec<f64>, Vec<f64>)>,
+) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let path = out.join(file);
+    let plot = Plot {
+        title: title.into(),
+        x_label: xl.into(),
+        y_label: yl.into(),
+        series: series
+            .into_iter()
+            .map(|(label, x, y)| (Series { label, x, y }, Style::Line))
+            .collect(),
+    };
+    write_png(&plot, &path, 1000, 600).map_err(|e| e.0)?;
+    Ok(PathBuf::from(file))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,25 +2,13 @@
 //! thread-count independence, and short physical runs (hydrostatic tank, 2-D and 3-D dam
 //! breaks) with stated bounds.
 
+mod common;
+use common::{bisph, cases_dir};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn bisph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bisph"))
-        .args(args)
-        .output()
-        .expect("bisph runs")
-}
-
-fn cases_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases")
-}
 
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bisph-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("test", name)
 }
 
 fn summary(dir: &Path) -> serde_json::Value {

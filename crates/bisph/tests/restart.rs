@@ -3,6 +3,9 @@
 //! uninterrupted run: every CSV series, the `.pvd` indices and every VTK frame. Damaged and
 //! foreign checkpoints are refused.
 
+mod common;
+use common::cases_dir;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -11,15 +14,8 @@ fn exe() -> Command {
     Command::new(env!("CARGO_BIN_EXE_bisph"))
 }
 
-fn cases_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases")
-}
-
 fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bisph-restart-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::temp_dir("restart", name)
 }
 
 /// A small seeded generator (64-bit LCG, top bits).
