@@ -305,7 +305,21 @@ impl<V: Vector> CellGrid<V> {
 
     /// Visits the cells at most `span` cells from the cell of `x`, wrapping around periodic
     /// axes (each cell once, at the image nearest to `x`), with the shift of each cell's image.
+    #[inline(always)]
     fn for_each_in_periodic_span(&self, x: V, span: i64, mut visit: impl FnMut(usize, V)) {
+        self.for_each_run(x, span, |run, shift| {
+            for &j in run {
+                visit(j as usize, shift);
+            }
+        });
+    }
+
+    /// Calls `visit(run, shift)` for each run of consecutive cells at most `span` cells from
+    /// the cell of `x` (a slice of point indices), wrapping around periodic axes (each cell
+    /// once, at the image nearest to `x`; `shift` moves its points there, zero without
+    /// periodic axes). One call site of `visit`, so callers' closures inline into it.
+    #[inline(always)]
+    fn for_each_run(&self, x: V, span: i64, mut visit: impl FnMut(&[u32], V)) {
         let c = self.coords(x);
         // Per axis: up to three runs of cell indices (lo, hi, shift along the axis).
         let mut runs = [[(0usize, 0usize, 0.0f64); 3]; 3];
@@ -313,7 +327,7 @@ impl<V: Vector> CellGrid<V> {
         for k in 0..3 {
             let d = self.dims[k] as i64;
             let s = if k < V::DIM { span } else { 0 };
-            if k < V::DIM && self.period.is_periodic(k) {
+            if self.periodic && k < V::DIM && self.period.is_periodic(k) {
                 let l = self.period.length.get(k);
                 let (mut a, mut b) = (c[k] - s, c[k] + s);
                 if b - a + 1 > d {
@@ -356,32 +370,12 @@ impl<V: Vector> CellGrid<V> {
                             shift.set(0, sx);
                             let start = self.cell_start[row + x0] as usize;
                             let end = self.cell_start[row + x1 + 1] as usize;
-                            for &j in &self.items[start..end] {
-                                visit(j as usize, shift);
-                            }
+                            visit(&self.items[start..end], shift);
                         }
                     }
                 }
             }
         }
-    }
-
-    /// The periodic branch of [`CellGrid::for_each_neighbour`].
-    #[inline(never)]
-    fn periodic_neighbours(
-        &self,
-        x: V,
-        points: &[V],
-        r2max: f64,
-        visit: &mut dyn FnMut(usize, V, f64),
-    ) {
-        self.for_each_in_periodic_span(x, 1, |j, shift| {
-            let r = points[j] + shift - x;
-            let r2 = r.length_squared();
-            if r2 < r2max {
-                visit(j, r, r2.sqrt());
-            }
-        });
     }
 
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
@@ -395,17 +389,16 @@ impl<V: Vector> CellGrid<V> {
         mut visit: impl FnMut(usize, V, f64),
     ) {
         let r2max = radius * radius;
-        if self.periodic {
-            // Out of line and through a trait object, so that the caller's closure is
-            // instantiated (and inlined) once, in the non-periodic hot path below.
-            self.periodic_neighbours(x, points, r2max, &mut visit);
-            return;
-        }
-        self.for_each_candidate(x, |j| {
-            let r = points[j] - x;
-            let r2 = r.length_squared();
-            if r2 < r2max {
-                visit(j, r, r2.sqrt());
+        self.for_each_run(x, 1, |run, shift| {
+            // The image of `x` seen from the run's points (exactly `x` without periodicity).
+            let origin = x - shift;
+            for &j in run {
+                let j = j as usize;
+                let r = points[j] - origin;
+                let r2 = r.length_squared();
+                if r2 < r2max {
+                    visit(j, r, r2.sqrt());
+                }
             }
         });
     }
