@@ -218,7 +218,7 @@ impl<V: Vector> CellGrid<V> {
     fn coords(&self, p: V) -> [i64; 3] {
         let mut c = [0i64; 3];
         for (k, ck) in c.iter_mut().enumerate().take(V::DIM) {
-            *ck = ((p.get(k) - self.origin.get(k)) * self.inv_cells[k]).floor() as i64;
+            *ck = floor_to_i64((p.get(k) - self.origin.get(k)) * self.inv_cells[k]);
         }
         c
     }
@@ -404,6 +404,15 @@ impl<V: Vector> CellGrid<V> {
     }
 }
 
+/// `v.floor() as i64` (saturating, NaN to 0) without a call into libm's software `floor`,
+/// which the baseline x86-64 target uses (no SSE4.1 `roundsd`): truncate, then step down
+/// for negative non-integers.
+#[inline(always)]
+fn floor_to_i64(v: f64) -> i64 {
+    let t = v as i64;
+    t.saturating_sub(i64::from(t as f64 > v))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -417,6 +426,17 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         })
+    }
+
+    #[test]
+    fn floor_to_i64_matches_floor() {
+        let values = [
+            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.999, -2.999, 1e-300, -1e-300, 1e30, -1e30,
+            f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 4503599627370495.5, -4503599627370495.5,
+        ];
+        for v in values.into_iter().chain(pseudo_random(1000, 3).map(|r| (r - 0.5) * 200.0)) {
+            assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
+        }
     }
 
     fn check<V: Vector>(points: Vec<V>, radius: f64) {
