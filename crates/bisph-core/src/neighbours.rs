@@ -145,9 +145,36 @@ impl<V: Vector> CellGrid<V> {
         self.cell
     }
 
-    /// Point indices sorted by cell (the permutation used to reorder particles).
+    /// Point indices sorted by cell, row by row (cells in index order).
     pub fn sorted_items(&self) -> &[u32] {
         &self.items
+    }
+
+    /// Writes into `order` the point indices with their cells along a Morton (Z-order)
+    /// curve, each cell's points in increasing index: the permutation used to reorder
+    /// particles, so that the cells around any cell lie close in memory along every axis
+    /// (rows only are close in [`CellGrid::sorted_items`]). `cells` is a reusable buffer.
+    pub fn morton_order(&self, order: &mut Vec<u32>, cells: &mut Vec<(u64, u32)>) {
+        let [nx, ny, nz] = self.dims;
+        cells.clear();
+        for cz in 0..nz {
+            for cy in 0..ny {
+                for cx in 0..nx {
+                    let c = cx + nx * (cy + ny * cz);
+                    if self.cell_start[c] != self.cell_start[c + 1] {
+                        cells.push((morton_key([cx, cy, cz], V::DIM), c as u32));
+                    }
+                }
+            }
+        }
+        cells.sort_unstable();
+        order.clear();
+        for &(_, c) in cells.iter() {
+            let c = c as usize;
+            order.extend_from_slice(
+                &self.items[self.cell_start[c] as usize..self.cell_start[c + 1] as usize],
+            );
+        }
     }
 
     /// Rebuilds the grid for `points` (all of which must be finite).
@@ -404,6 +431,19 @@ impl<V: Vector> CellGrid<V> {
     }
 }
 
+/// Morton key of cell coordinates: their bits interleaved (`dim` = 2 or 3 axes, at most
+/// 32 or 21 bits each).
+fn morton_key(c: [usize; 3], dim: usize) -> u64 {
+    let bits = if dim == 2 { 32 } else { 21 };
+    let mut key = 0u64;
+    for b in 0..bits {
+        for (k, &ck) in c.iter().enumerate().take(dim) {
+            key |= (((ck as u64) >> b) & 1) << (b * dim + k);
+        }
+    }
+    key
+}
+
 /// `v.floor() as i64` (saturating, NaN to 0) without a call into libm's software `floor`,
 /// which the baseline x86-64 target uses (no SSE4.1 `roundsd`): truncate, then step down
 /// for negative non-integers.
@@ -430,11 +470,14 @@ mod tests {
 
     #[test]
     fn floor_to_i64_matches_floor() {
-        let values = [
-            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.999, -2.999, 1e-300, -1e-300, 1e30, -1e30,
-            f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 4503599627370495.5, -4503599627370495.5,
+        let small = [
+            0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.999, -2.999, 1e-300, -1e-300,
         ];
-        for v in values.into_iter().chain(pseudo_random(1000, 3).map(|r| (r - 0.5) * 200.0)) {
+        let large = [1e30, -1e30, 4503599627370495.5, -4503599627370495.5];
+        let special = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+        let values = small.into_iter().chain(large).chain(special);
+        let random = pseudo_random(1000, 3).map(|r| (r - 0.5) * 200.0);
+        for v in values.chain(random) {
             assert_eq!(floor_to_i64(v), v.floor() as i64, "{v}");
         }
     }
@@ -555,6 +598,28 @@ mod tests {
         let w = period.wrap(DVec2::new(1.5, 7.0));
         assert!((w.x + 0.5).abs() < 1e-15 && w.y == 7.0);
         assert_eq!(period.wrap(DVec2::new(-1.0 - 1e-18, 0.0)).x, -1.0);
+    }
+
+    #[test]
+    fn morton_order_is_a_permutation_along_the_z_curve() {
+        assert_eq!(morton_key([1, 0, 0], 2), 1);
+        assert_eq!(morton_key([0, 1, 0], 2), 2);
+        assert_eq!(morton_key([3, 3, 0], 2), 15);
+        assert_eq!(morton_key([0, 0, 1], 3), 4);
+        assert_eq!(morton_key([1, 1, 1], 3), 7);
+        assert_eq!(morton_key([2, 0, 0], 3), 8);
+        // Points at the centres of a 4 x 4 grid of unit cells, listed row by row.
+        let pts: Vec<DVec2> = (0..16)
+            .map(|k| DVec2::new((k % 4) as f64 + 0.5, (k / 4) as f64 + 0.5))
+            .collect();
+        let mut grid = CellGrid::new(1.0);
+        grid.rebuild(&pts);
+        let (mut order, mut cells) = (Vec::new(), Vec::new());
+        grid.morton_order(&mut order, &mut cells);
+        assert_eq!(
+            order,
+            [0, 1, 4, 5, 2, 3, 6, 7, 8, 9, 12, 13, 10, 11, 14, 15]
+        );
     }
 
     #[test]

@@ -136,7 +136,7 @@ pub struct SimConfig<V: Vector> {
     pub wall_model: WallModelChoice,
     /// Time integrator.
     pub integrator: Integrator,
-    /// Reorder particles by cell every this many steps (0 = never).
+    /// Reorder particles along a Morton curve of cells every this many steps (0 = never).
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
@@ -169,6 +169,9 @@ struct Scratch<V> {
     previous_density_rate: Vec<f64>,
     drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
+    /// The reordering permutation and its Morton-keyed cells.
+    order: Vec<u32>,
+    morton_cells: Vec<(u64, u32)>,
 }
 
 /// The state of a running simulation.
@@ -490,8 +493,10 @@ impl<V: Vector> Simulation<V> {
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
             let sorted = Instant::now();
-            self.fluid
-                .permute(self.fluid_grid.sorted_items(), &mut self.scratch.permute);
+            let scratch = &mut self.scratch;
+            self.fluid_grid
+                .morton_order(&mut scratch.order, &mut scratch.morton_cells);
+            self.fluid.permute(&scratch.order, &mut scratch.permute);
             self.timings.reorder += sorted.elapsed().as_secs_f64();
             self.fluid_grid.rebuild(&self.fluid.position);
         }
@@ -761,15 +766,20 @@ impl<V: Vector> Simulation<V> {
     fn check_state(&self) -> Result<(), SimError> {
         let f = &self.fluid;
         let (lo, hi) = (self.config.domain_min, self.config.domain_max);
-        let bad = (0..f.len()).into_par_iter().position_first(|i| {
+        let is_bad = |i: usize| {
             let r = f.position[i];
             let outside = (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k)));
             outside
                 || !f.velocity[i].is_finite()
-                || !f.density[i].is_finite()
-                || f.density[i].is_nan()
-                || f.density[i] <= 0.0
-        });
+                || !(f.density[i].is_finite() && f.density[i] > 0.0)
+        };
+        // Sequential scans of blocks in parallel: the first bad particle in memory order,
+        // without the per-item synchronisation of a parallel `position_first`.
+        const BLOCK: usize = 4096;
+        let n = f.len();
+        let bad = (0..n.div_ceil(BLOCK))
+            .into_par_iter()
+            .find_map_first(|b| (b * BLOCK..((b + 1) * BLOCK).min(n)).find(|&i| is_bad(i)));
         let Some(i) = bad else { return Ok(()) };
         let (particle, step, time) = (f.id[i], self.step, self.time);
         if !f.position[i].is_finite() {
