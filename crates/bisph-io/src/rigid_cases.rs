@@ -28,18 +28,34 @@ pub(crate) fn mean_between(t: &[f64], y: &[f64], a: f64, b: f64) -> f64 {
     s / n as f64
 }
 
-/// Mean interval between upward crossings of `mid` after `t0`.
+/// Oscillation period from the crossings of `mid` after `t0`, upward and downward (zero-crossing
+/// analysis): twice the mean interval between the first and the last crossing. NaN with
+/// fewer than three crossings.
 pub(crate) fn period_about(t: &[f64], x: &[f64], mid: f64, t0: f64) -> f64 {
-    let mut ups = Vec::new();
+    let mut crossings = Vec::new();
     for k in 1..x.len() {
-        if t[k] > t0 && x[k - 1] < mid && x[k] >= mid {
-            ups.push(t[k - 1] + (mid - x[k - 1]) / (x[k] - x[k - 1]) * (t[k] - t[k - 1]));
+        if t[k] > t0 && (x[k - 1] - mid) * (x[k] - mid) <= 0.0 && x[k] != x[k - 1] {
+            crossings.push(t[k - 1] + (mid - x[k - 1]) / (x[k] - x[k - 1]) * (t[k] - t[k - 1]));
         }
     }
-    if ups.len() < 2 {
+    crossings.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    if crossings.len() < 3 {
         return f64::NAN;
     }
-    (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64
+    2.0 * (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64
+}
+
+/// The window `[a, b]` between the first and the last upward crossing of `mid` after `t0`
+/// (a whole number of oscillation periods), or `[t0, end]` with fewer than two crossings.
+pub(crate) fn whole_periods(t: &[f64], x: &[f64], mid: f64, t0: f64) -> (f64, f64) {
+    let ups: Vec<f64> = (1..x.len())
+        .filter(|&k| t[k] > t0 && x[k - 1] < mid && x[k] >= mid)
+        .map(|k| t[k - 1] + (mid - x[k - 1]) / (x[k] - x[k - 1]) * (t[k] - t[k - 1]))
+        .collect();
+    match (ups.first(), ups.last()) {
+        (Some(&a), Some(&b)) if b > a => (a, b),
+        _ => (t0, t.last().copied().unwrap_or(t0)),
+    }
 }
 
 /// Floating box (2-D free body) settling to its Archimedes draft.
@@ -50,7 +66,7 @@ impl ValidationCase for FloatingBox {
         "floating-box-2d"
     }
     fn description(&self) -> &'static str {
-        "free rigid body: a box released at half its draft settles to the Archimedes draft; heave period between the linear estimates without and with added mass"
+        "free rigid body: a box released at half its draft settles to the Archimedes draft (free surface from height probes); heave period between the linear estimates without and with added mass"
     }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
         let settings: &[&str] = if quick {
@@ -75,15 +91,34 @@ impl ValidationCase for FloatingBox {
         let (ph, prow) = read_columns(&out.join("probes.csv"))?;
         let tp = column(&ph, &prow, "t")?;
         let p = column(&ph, &prow, "level")?;
+        let left = column(&ph, &prow, "depth_left")?;
+        let right = column(&ph, &prow, "depth_right")?;
         // Case constants (cases/floating-box-2d.toml).
-        let (rho, g, b, half_height, mass, probe_y) = (1000.0, 9.81, 0.6, 0.2, 120.0, 0.3);
+        let (rho, g, b, width, half_height, mass, probe_y) =
+            (1000.0, 9.81, 0.6, 2.0, 0.2, 120.0, 0.3);
         let draft_ref = mass / (rho * b);
         let end = t.last().copied().unwrap_or(0.0);
         let settle = 0.6;
-        let level: Vec<f64> = p.iter().map(|p| probe_y + p / (rho * g)).collect();
-        let level_mean = mean_between(&tp, &level, settle, end);
-        let centre_mean = mean_between(&t, &y, settle, end);
+        // Free-surface level away from the box: the mean of the two water-depth columns.
+        let depth: Vec<f64> = left
+            .iter()
+            .zip(&right)
+            .map(|(l, r)| 0.5 * (l + r))
+            .collect();
+        // Means over whole heave periods after the settling time.
+        let rough_centre = mean_between(&t, &y, settle, end);
+        let (a, w) = whole_periods(&t, &y, rough_centre, settle);
+        let centre_mean = mean_between(&t, &y, a, w);
+        let level_mean = mean_between(&tp, &depth, a, w);
         let draft = level_mean - (centre_mean - half_height);
+        // Cross-checks: the level the pressure probe implies (y + p / (rho0 g)), and the level
+        // that keeps the lattice volume N dx^2 of the water with the box at its mean height.
+        let pressure_level: Vec<f64> = p.iter().map(|p| probe_y + p / (rho * g)).collect();
+        let pressure_level_mean = mean_between(&tp, &pressure_level, a, w);
+        let dx = loaded.case.resolution.dx;
+        let volume = s.fluid_particles as f64 * dx * dx;
+        let bottom = centre_mean - half_height;
+        let volume_draft = (volume - width * bottom) / (width - b);
         let period = period_about(&t, &y, centre_mean, 0.2);
         let t0 = 2.0 * PI * (draft_ref / g).sqrt();
         // Added mass of a half-immersed circle of diameter B: rho pi B^2 / 8.
@@ -100,7 +135,8 @@ impl ValidationCase for FloatingBox {
             "y [m]",
             vec![
                 line("box centre", t.clone(), y.clone()),
-                line("level (probe)", tp.clone(), level),
+                line("level (height probes)", tp.clone(), depth),
+                line("level (pressure probe)", tp.clone(), pressure_level),
                 line(
                     "Archimedes centre",
                     vec![0.0, end],
@@ -118,12 +154,6 @@ impl ValidationCase for FloatingBox {
                     draft_ref,
                     Tolerance::Relative(0.05),
                     "Archimedes d = m / (rho0 B); issue 8: 5% at the quick resolution",
-                )
-                .known_failure(
-                    "the far-field level comes from a pressure probe; with the corrected sign of \
-                     the hydrostatic delta-SPH term (issue 6) the probe reads about 5% more \
-                     pressure and the draft 0.227 m (0.206 m before the fix, box centre within \
-                     2 mm): the level measurement needs revisiting",
                 ),
                 Check::new(
                     "heave period / no-added-mass period",
@@ -149,7 +179,7 @@ impl ValidationCase for FloatingBox {
             ],
             plots,
             notes: vec![format!(
-                "draft {draft:.4} m (Archimedes {draft_ref:.4}; far-field level {level_mean:.4} m from the probe, mean centre {centre_mean:.4} m over t in [{settle}, {end:.2}] s); heave period {period:.4} s (T0 = {t0:.4}, with added mass {t_added:.4}); largest tilt {max_roll:.3} deg; energy drift (fluid + wall work) {:.3e}, fluid + body energy drift {:.3e} (max), difference {exchange:.2e}: the fluid-body exchange closes; {} particles, {} steps, {:.2} iterations per step.",
+                "draft {draft:.4} m (Archimedes {draft_ref:.4}): far-field level {level_mean:.4} m from the height probes, mean centre {centre_mean:.4} m over t in [{a:.2}, {w:.2}] s (whole heave periods); cross-checks: the lattice volume N dx^2 gives the draft {volume_draft:.4} m, the pressure probe the level {pressure_level_mean:.4} m; heave period {period:.4} s (T0 = {t0:.4}, with added mass {t_added:.4}); largest tilt {max_roll:.3} deg; energy drift (fluid + wall work) {:.3e}, fluid + body energy drift {:.3e} (max), difference {exchange:.2e}; {} particles, {} steps, {:.2} iterations per step.",
                 s.energy_drift_max_relative,
                 s.fluid_body_energy_drift_max_relative.unwrap_or(f64::NAN),
                 s.fluid_particles,
