@@ -151,6 +151,38 @@ const TUMBLING_3D: Case = Case {
     checkpoint_steps: "4",
 };
 
+/// Semi-analytical walls (paper 3) with gamma integrated in time (eq 4): gamma and its
+/// gradient are particle state that the checkpoint carries.
+const USAW: Case = Case {
+    name: "usaw",
+    file: "usaw-still-water.toml",
+    sets: &[
+        "resolution.dx=0.1",
+        "time.end=0.3",
+        "output.vtk_interval=0.1",
+        "output.series_interval=0",
+        "output.plots=false",
+    ],
+    per_step: "energy.csv",
+    checkpoint_steps: "6",
+};
+
+/// The same with densities by summation (paper 3, eq 84): the per-particle offsets `C_i` are
+/// integrated state too.
+const USAW_SUMMATION: Case = Case {
+    name: "usaw-summation",
+    sets: &[
+        "resolution.dx=0.1",
+        "time.end=0.3",
+        "output.vtk_interval=0.1",
+        "output.series_interval=0",
+        "output.plots=false",
+        "usaw.continuity=\"summation\"",
+        "usaw.density_power=1",
+    ],
+    ..USAW
+};
+
 fn fresh_args(case: &Case, out: &Path) -> Vec<String> {
     let mut a = vec![
         "run".to_string(),
@@ -352,6 +384,15 @@ fn killed_free_body_runs_resume_bit_identically() {
     );
     assert!(a >= 5 && b >= 1 && c >= 1 && d >= 1);
     assert!(iterated + staggered + verlet + tumbling >= 10);
+}
+
+/// Semi-analytical walls: integrated gamma (and summation densities), 4 seeded SIGKILLs.
+#[test]
+fn killed_usaw_runs_resume_bit_identically() {
+    let (gamma, a) = kill_resume_compare(&USAW, 0x5eed_0009, 1, 2);
+    let (summation, b) = kill_resume_compare(&USAW_SUMMATION, 0x5eed_000a, 1, 2);
+    eprintln!("usaw: {gamma} and {summation} SIGKILLs, {a} and {b} resumes");
+    assert!(a >= 1 && b >= 1);
 }
 
 /// SIGTERM: the run finishes its step, writes a checkpoint, exits with code 10 and its
