@@ -329,6 +329,29 @@ impl Surface {
         (mass, centre, DMat3::IDENTITY * trace - c)
     }
 
+    /// Number of elements [`Surface::elements`] makes at `size` (as a float, so that a huge
+    /// mesh or a tiny size cannot overflow): lets a caller refuse a mesh before allocating.
+    pub fn element_count(&self, size: f64) -> f64 {
+        let count = |l: f64| (l / size * (1.0 - 1e-9)).ceil().max(1.0);
+        let mut total = 0.0;
+        for f in 0..self.faces.len() {
+            let p = self.corners(f);
+            total += if p.len() == 3 {
+                let m = count(
+                    (p[1] - p[0])
+                        .length()
+                        .max((p[2] - p[1]).length())
+                        .max((p[0] - p[2]).length()),
+                );
+                m * m
+            } else {
+                count((p[1] - p[0]).length().max((p[2] - p[3]).length()))
+                    * count((p[3] - p[0]).length().max((p[2] - p[1]).length()))
+            };
+        }
+        total
+    }
+
     /// Boundary elements of about `size`: every triangle split into `m^2` similar triangles
     /// and every (planar) quadrilateral into `m x n` bilinear sub-quads, `m`, `n` from the
     /// longest edges; each element at its centroid with its area and the face's normal.

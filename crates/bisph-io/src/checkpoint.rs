@@ -16,24 +16,27 @@
 //!
 //! What is saved: the fluid arrays in their current memory order (the run reorders particles
 //! by cell, and sums run in memory order, so the order is part of the state), the wall elements'
-//! moving geometry, velocities and pressures, the pistons, the integrator history (rates of the
+//! moving geometry, velocities and pressures, the pistons and free rigid bodies (attitude,
+//! position, velocities and the accelerations the integrator keeps), the integrator history (rates of the
 //! last evaluation, which the midpoint scheme uses as its first guess and Verlet as its first
 //! kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
 //! controller's memory and driving force, and the run loop's counters (next output times, frames,
-//! CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
+//! CSV lengths, free bodies' CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
 //! configuration) are rebuilt from the case text stored in the checkpoint.
 
 use crate::output::OutputError;
 use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
-use bisph_core::walls::Motion;
+use bisph_core::walls::{FreeBody, Motion};
 use bisph_core::{Simulation, Vector};
+use glam::{DQuat, DVec3};
 use std::path::{Path, PathBuf};
 
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-pub const FORMAT_VERSION: u32 = 3;
+/// (4: free rigid bodies and their CSV lengths; 3: without them).
+pub const FORMAT_VERSION: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// File name of the checkpoint in an output directory.
@@ -158,6 +161,45 @@ pub struct SimState<V: Vector> {
     pub corners: Vec<V>,
     /// Pistons in body order: (body index, position, velocity, acceleration).
     pub pistons: Vec<(u32, f64, f64, f64)>,
+    /// Free rigid bodies in body order: (body index, [`free_body_values`]).
+    pub free_bodies: Vec<(u32, [f64; FREE_BODY_VALUES])>,
+}
+
+/// Numbers of a free body's evolving state in a checkpoint.
+pub const FREE_BODY_VALUES: usize = 19;
+
+/// The evolving state of a free body: attitude quaternion `(x, y, z, w)`, displacement,
+/// velocity, body-axes angular velocity, acceleration, body-axes angular acceleration (the
+/// accelerations are the integrator's memory: the midpoint scheme's first guess, Verlet's first
+/// kick, and the load a staggered body moves with). Mass, inertia, locks and coupling are
+/// static (rebuilt from the case).
+pub fn free_body_values(b: &FreeBody) -> [f64; FREE_BODY_VALUES] {
+    let mut v = [0.0; FREE_BODY_VALUES];
+    v[..4].copy_from_slice(&b.attitude.to_array());
+    for (k, x) in [
+        b.position,
+        b.velocity,
+        b.angular_velocity,
+        b.acceleration,
+        b.angular_acceleration,
+    ]
+    .iter()
+    .enumerate()
+    {
+        v[4 + 3 * k..7 + 3 * k].copy_from_slice(&x.to_array());
+    }
+    v
+}
+
+/// Puts [`free_body_values`] back into `b`.
+pub fn set_free_body_values(b: &mut FreeBody, v: &[f64; FREE_BODY_VALUES]) {
+    let at = |k: usize| DVec3::from_slice(&v[4 + 3 * k..7 + 3 * k]);
+    b.attitude = DQuat::from_array([v[0], v[1], v[2], v[3]]);
+    b.position = at(0);
+    b.velocity = at(1);
+    b.angular_velocity = at(2);
+    b.acceleration = at(3);
+    b.angular_acceleration = at(4);
 }
 
 impl<V: Vector> SimState<V> {
@@ -198,10 +240,15 @@ impl<V: Vector> SimState<V> {
         self.pressure.clone_from(&e.pressure);
         self.corners.clone_from(&e.corners);
         self.pistons.clear();
+        self.free_bodies.clear();
         for (b, body) in sim.walls.bodies.iter().enumerate() {
-            if let Motion::Piston(p) = body.motion {
-                self.pistons
-                    .push((b as u32, p.position, p.velocity, p.acceleration));
+            match &body.motion {
+                Motion::Piston(p) => {
+                    self.pistons
+                        .push((b as u32, p.position, p.velocity, p.acceleration))
+                }
+                Motion::Free(f) => self.free_bodies.push((b as u32, free_body_values(f))),
+                _ => {}
             }
         }
     }
@@ -351,6 +398,62 @@ impl<V: Vector> SimState<V> {
         if pistons != self.pistons.iter().map(|p| p.0).collect::<Vec<_>>() {
             return Err("the pistons saved are not the case's pistons".into());
         }
+        let free: Vec<u32> = sim
+            .walls
+            .bodies
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| matches!(b.motion, Motion::Free(_)))
+            .map(|(k, _)| k as u32)
+            .collect();
+        if free != self.free_bodies.iter().map(|b| b.0).collect::<Vec<_>>() {
+            return Err("the free bodies saved are not the case's free bodies".into());
+        }
+        // Dynamic bodies must stay where one step cannot throw their walls far away (the
+        // element grid is sized by their spread): displacements within the domain's extent,
+        // speeds up to 1000 c0, accelerations up to 1000 c0^2 / h.
+        let extent = (0..V::DIM)
+            .map(|k| hi.get(k) - lo.get(k))
+            .fold(0.0, f64::max);
+        let c0 = sim.config.eos.c0();
+        let (speed, accel) = (1e3 * c0, 1e3 * c0 * c0 / sim.config.kernel.h);
+        let fits =
+            |x: f64, v: f64, a: f64| x.abs() <= extent && v.abs() <= speed && a.abs() <= accel;
+        for &(b, x, v, a) in &self.pistons {
+            if !fits(x, v, a) {
+                return Err(format!(
+                    "piston {b}: position {x}, velocity {v} or acceleration {a} out of range \
+                     (|x| <= {extent}, |v| <= {speed}, |a| <= {accel})"
+                ));
+            }
+        }
+        for (b, values) in &self.free_bodies {
+            let q = DQuat::from_array([values[0], values[1], values[2], values[3]]);
+            let norm = DVec3::from_slice(&values[4..7]).length();
+            let length = |k: usize| DVec3::from_slice(&values[4 + 3 * k..7 + 3 * k]).length();
+            if values.iter().any(|x| !x.is_finite()) || (q.length() - 1.0).abs() > 1e-9 {
+                return Err(format!(
+                    "free body {b}: non-finite state or an attitude that is not a unit quaternion"
+                ));
+            }
+            if !fits(norm, length(1), length(3)) {
+                return Err(format!(
+                    "free body {b}: displacement {norm}, speed {} or acceleration {} out of range \
+                     (<= {extent}, {speed}, {accel})",
+                    length(1),
+                    length(3)
+                ));
+            }
+            // Rotation rates: a turn of at most 1000 c0 / extent rad/s (rim speeds like the
+            // linear bound); angular accelerations likewise.
+            if length(2) * extent > speed || length(4) * extent > accel {
+                return Err(format!(
+                    "free body {b}: angular velocity {} or angular acceleration {} out of range",
+                    length(2),
+                    length(4)
+                ));
+            }
+        }
         sim.time = self.time;
         sim.step = self.step;
         sim.last_dt = self.last_dt;
@@ -390,6 +493,11 @@ impl<V: Vector> SimState<V> {
                 p.position = position;
                 p.velocity = velocity;
                 p.acceleration = acceleration;
+            }
+        }
+        for (b, values) in &self.free_bodies {
+            if let Motion::Free(f) = &mut sim.walls.bodies[*b as usize].motion {
+                set_free_body_values(f, values);
             }
         }
         sim.fluid_grid.rebuild(&sim.fluid.position);
@@ -452,6 +560,10 @@ pub struct RunCounters {
     pub wall_seconds: f64,
     /// Step size the run started with (for the time-step collapse watch).
     pub dt0: f64,
+    /// Bytes of each free body's `body_<name>.csv`, in body order.
+    pub body_csv_lengths: Vec<u64>,
+    /// Largest fluid + free bodies energy drift so far (see `Summary`).
+    pub fluid_body_max: f64,
 }
 
 impl RunCounters {
@@ -473,7 +585,10 @@ impl RunCounters {
                 self.next_frame
             ));
         }
-        if self.frame_times.iter().any(|x| !x.is_finite()) || !self.dt0.is_finite() {
+        if self.frame_times.iter().any(|x| !x.is_finite())
+            || !self.dt0.is_finite()
+            || !self.fluid_body_max.is_finite()
+        {
             return Err("non-finite frame times or first step".into());
         }
         Ok(())
@@ -652,6 +767,13 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
         w.f64(v);
         w.f64(a);
     }
+    w.u64(s.free_bodies.len() as u64);
+    for (b, values) in &s.free_bodies {
+        w.u32(*b);
+        for &x in values {
+            w.f64(x);
+        }
+    }
     let r = &c.run;
     w.f64(r.next_series);
     w.f64(r.next_frame);
@@ -669,6 +791,11 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     }
     w.f64(r.wall_seconds);
     w.f64(r.dt0);
+    w.u64(r.body_csv_lengths.len() as u64);
+    for &l in &r.body_csv_lengths {
+        w.u64(l);
+    }
+    w.f64(r.fluid_body_max);
     w.u64(c.history.len() as u64);
     for row in &c.history {
         for &x in row {
@@ -731,6 +858,15 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
     for _ in 0..n {
         s.pistons.push((r.u32()?, r.f64()?, r.f64()?, r.f64()?));
     }
+    let n = r.len(4 + 8 * FREE_BODY_VALUES)?;
+    for _ in 0..n {
+        let b = r.u32()?;
+        let mut values = [0.0; FREE_BODY_VALUES];
+        for x in values.iter_mut() {
+            *x = r.f64()?;
+        }
+        s.free_bodies.push((b, values));
+    }
     let mut run = RunCounters {
         next_series: r.f64()?,
         next_frame: r.f64()?,
@@ -750,6 +886,11 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
     }
     run.wall_seconds = r.f64()?;
     run.dt0 = r.f64()?;
+    let n = r.len(8)?;
+    for _ in 0..n {
+        run.body_csv_lengths.push(r.u64()?);
+    }
+    run.fluid_body_max = r.f64()?;
     let n = r.len(8 * ENERGY_COLUMNS)?;
     let mut history = Vec::with_capacity(n);
     for _ in 0..n {
@@ -904,6 +1045,20 @@ mod tests {
         c.sim.pressure = vec![3.0];
         c.sim.corners = vec![DVec2::ZERO, DVec2::X];
         c.sim.pistons = vec![(1, 0.1, -0.2, 0.3)];
+        let mut free = FreeBody::new(
+            2.0,
+            glam::DMat3::IDENTITY,
+            DQuat::from_rotation_z(0.3),
+            DVec3::new(0.0, -9.81, 0.0),
+        );
+        free.position = DVec3::new(0.1, -0.2, 0.0);
+        free.velocity = DVec3::new(0.5, 0.25, 0.0);
+        free.angular_velocity = DVec3::new(0.0, 0.0, 1.5);
+        free.acceleration = DVec3::new(-1.0, 2.0, 0.0);
+        free.angular_acceleration = DVec3::new(0.0, 0.0, -3.0);
+        c.sim.free_bodies = vec![(2, free_body_values(&free))];
+        c.run.body_csv_lengths = vec![1234];
+        c.run.fluid_body_max = 0.01;
         c.run.frame_times = vec![0.0, 0.1];
         c.run.csv_lengths = [10, 20, 30, 0, 0, 40];
         c.sim.viscous_dissipation = 0.5;
@@ -924,6 +1079,25 @@ mod tests {
         assert_eq!(encode(&back), bytes);
         assert_eq!(back.sim.fluid.id, c.sim.fluid.id);
         assert_eq!(back.sim.pistons, c.sim.pistons);
+        assert_eq!(back.sim.free_bodies, c.sim.free_bodies);
+        assert_eq!(back.run.body_csv_lengths, vec![1234]);
+        let mut b = FreeBody::new(1.0, glam::DMat3::IDENTITY, DQuat::IDENTITY, DVec3::ZERO);
+        set_free_body_values(&mut b, &c.sim.free_bodies[0].1);
+        assert_eq!(free_body_values(&b), c.sim.free_bodies[0].1);
+        assert_eq!(b.attitude, DQuat::from_rotation_z(0.3));
+    }
+
+    #[test]
+    fn other_formats_are_refused_by_name() {
+        let mut bytes = encode(&sample());
+        bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let e = decode::<DVec2>(Path::new("old.bin"), &bytes).unwrap_err();
+        assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .contains("checkpoint format 3, this bisph reads format 4"),
+            "{e}"
+        );
     }
 
     #[test]

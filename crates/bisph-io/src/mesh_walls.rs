@@ -153,6 +153,12 @@ pub fn wall_surface(
         .map_err(|e| loaded.error(key, e.to_string()))?;
     let t = wall_transform(w);
     surface.map(|p| t.apply3(p));
+    if surface.vertices.iter().any(|p| !p.is_finite()) {
+        return Err(loaded.error(
+            key,
+            "the transformed mesh has a non-finite coordinate (check scale and units)",
+        ));
+    }
     if closed {
         let volume = surface.volume();
         if volume < 0.0 {
@@ -174,5 +180,26 @@ pub fn wall_elements(
     w: &WallSpec,
     size: f64,
 ) -> Result<Vec<ElementShape<DVec3>>, CaseError> {
-    Ok(wall_surface(loaded, key, w, size)?.elements(size))
+    let surface = wall_surface(loaded, key, w, size)?;
+    checked_elements(&surface, size).map_err(|m| loaded.error(key, m))
+}
+
+/// Most elements one mesh wall may make (a mesh in the wrong units, or a coordinate far off,
+/// must be refused before the elements are allocated).
+pub const MAX_MESH_ELEMENTS: f64 = 2e7;
+
+/// The surface's elements of about `size`, refused (with the count) beyond
+/// [`MAX_MESH_ELEMENTS`] or the memory available.
+pub fn checked_elements(surface: &Surface, size: f64) -> Result<Vec<ElementShape<DVec3>>, String> {
+    let count = surface.element_count(size);
+    let bytes = count * crate::resources::bytes_per_element(3) as f64;
+    let available = crate::resources::available_memory().map_or(f64::INFINITY, |b| b as f64);
+    if !(count <= MAX_MESH_ELEMENTS && bytes <= available) {
+        return Err(format!(
+            "the mesh makes {count:.3e} boundary elements of size {size} (about {:.3} GiB; at most \
+             {MAX_MESH_ELEMENTS:e}): check its units, scale and element_size",
+            bytes / (1u64 << 30) as f64
+        ));
+    }
+    Ok(surface.elements(size))
 }

@@ -367,20 +367,13 @@ pub fn run<V: CaseDim>(
         .bodies
         .iter()
         .any(|b| matches!(b.motion, Motion::Free(_)));
-    if has_free && resumed.is_some() {
-        return Err(RunError::Checkpoint(CheckpointError::Mismatch {
-            path: checkpoint_path.clone(),
-            reason: "resuming a run with free bodies is not supported yet".into(),
-        }));
-    }
-    for b in &sim.walls.bodies {
-        if matches!(b.motion, Motion::Free(_)) {
-            free_csv.push(Series::create(
-                out.join(format!("body_{}.csv", b.name)),
-                &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
-            )?);
-        }
-    }
+    let free_csv_paths: Vec<PathBuf> = sim
+        .walls
+        .bodies
+        .iter()
+        .filter(|b| matches!(b.motion, Motion::Free(_)))
+        .map(|b| out.join(format!("body_{}.csv", b.name)))
+        .collect();
     let body_energy = |sim: &Simulation<V>| {
         let e = sim.energy();
         let (k, p) = sim.walls.body_energy();
@@ -412,12 +405,26 @@ pub fn run<V: CaseDim>(
                     path: checkpoint_path.clone(),
                     reason,
                 })?;
+            if c.run.body_csv_lengths.len() != free_csv_paths.len() {
+                return Err(RunError::Checkpoint(CheckpointError::Mismatch {
+                    path: checkpoint_path.clone(),
+                    reason: format!(
+                        "{} free-body series saved, the case has {} free bodies",
+                        c.run.body_csv_lengths.len(),
+                        free_csv_paths.len()
+                    ),
+                }));
+            }
             for (k, header) in headers.iter().enumerate() {
                 if header.is_some() {
                     let path = out.join(checkpoint::SERIES_FILES[k]);
                     outputs.series[k] = Some(Series::reopen(path, c.run.csv_lengths[k])?);
                 }
             }
+            for (path, &len) in free_csv_paths.iter().zip(&c.run.body_csv_lengths) {
+                free_csv.push(Series::reopen(path.clone(), len)?);
+            }
+            fluid_body_max = c.run.fluid_body_max;
             frames = Frames::resume(out, &c.run.frame_times)?;
             counters = c.run;
             history = c.history;
@@ -431,6 +438,12 @@ pub fn run<V: CaseDim>(
                     let path = out.join(checkpoint::SERIES_FILES[k]);
                     outputs.series[k] = Some(Series::create(path, h)?);
                 }
+            }
+            for path in &free_csv_paths {
+                free_csv.push(Series::create(
+                    path.clone(),
+                    &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
+                )?);
             }
             // A stale checkpoint or report from an earlier run in this folder must not be
             // mistaken for this run's.
@@ -618,6 +631,11 @@ pub fn run<V: CaseDim>(
             counters.dt0 = sim.next_dt();
         }
         counters.csv_lengths = outputs.lengths();
+        counters.body_csv_lengths.clear();
+        counters
+            .body_csv_lengths
+            .extend(free_csv.iter().map(|s| s.len()));
+        counters.fluid_body_max = fluid_body_max;
         counters.frame_times.clear();
         counters.frame_times.extend_from_slice(frames.times());
         counters.wall_seconds = wall_before + started.elapsed().as_secs_f64();

@@ -1,5 +1,5 @@
 //! Geometry files: 2-D polygon vertex lists (CSV or whitespace text), 3-D STL meshes (binary
-//! and ASCII), particle position files; and the transform (units, scale, rotation,
+//! and ASCII) and OBJ meshes, particle position files; and the transform (units, scale, rotation,
 //! translation) a case applies to them. Errors name the file and, where it applies, the line.
 
 use glam::{DVec2, DVec3};
@@ -192,6 +192,12 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<([DVec3; 3], DVec3)>, 
 pub fn read_obj(path: &Path) -> Result<Vec<Vec<DVec3>>, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    parse_obj(&text, path)
+}
+
+/// [`read_obj`] on text already read; `path` names the source in messages. Vertices must be
+/// finite.
+pub fn parse_obj(text: &str, path: &Path) -> Result<Vec<Vec<DVec3>>, String> {
     let mut vertices: Vec<DVec3> = Vec::new();
     let mut faces = Vec::new();
     for (n, raw) in text.lines().enumerate() {
@@ -202,10 +208,12 @@ pub fn read_obj(path: &Path) -> Result<Vec<Vec<DVec3>>, String> {
             Some("v") => {
                 let v: Result<Vec<f64>, _> = words.take(3).map(str::parse::<f64>).collect();
                 match v {
-                    Ok(v) if v.len() == 3 => vertices.push(DVec3::new(v[0], v[1], v[2])),
+                    Ok(v) if v.len() == 3 && v.iter().all(|x| x.is_finite()) => {
+                        vertices.push(DVec3::new(v[0], v[1], v[2]))
+                    }
                     _ => {
                         return Err(format!(
-                            "{}: expected \"v x y z\", found \"{}\"",
+                            "{}: expected \"v x y z\" with finite numbers, found \"{}\"",
                             here(),
                             raw.trim()
                         ))

@@ -1,5 +1,6 @@
 //! Fuzzing of every input bisph reads: case TOML (parsing, `--set` overrides, checks, building),
-//! polygon/particle row files, STL meshes and checkpoints. Each must answer with a value or a
+//! polygon/particle row files, STL and OBJ meshes (read, then through the mesh-wall steps:
+//! welded faces, topology, mass properties, elements) and checkpoints. Each must answer with a value or a
 //! named error: no panic, no hang, no allocation beyond what the input's own size justifies.
 //!
 //! Structured generators (mutations of valid inputs) and byte-level ones run under proptest.
@@ -9,11 +10,14 @@
 //! --test fuzz -- --test-threads 1 --nocapture fuzz_checkpoint`.
 //! Inputs that once failed are kept under `tests/fuzz-corpus/<kind>/` and replayed every run.
 
+use bisph_core::surface::Surface;
 use bisph_io::build::build_simulation;
 use bisph_io::checkpoint::{self, Checkpoint, SimState};
-use bisph_io::shapes::{parse_rows, parse_stl};
+use bisph_io::mesh_walls::{checked_elements, MAX_MESH_ELEMENTS};
+use bisph_io::shapes::{parse_obj, parse_rows, parse_stl};
 use bisph_io::{parse_case, resources};
 use glam::DVec2;
+use glam::DVec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::{Path, PathBuf};
@@ -285,10 +289,99 @@ fn fuzz_rows_and_stl() {
         for cols in 1..4 {
             let _ = parse_rows(&text, Path::new("<fuzz>"), cols);
         }
-        if parse_stl(&bytes, Path::new("<fuzz>")).is_ok() {
+        if let Ok(facets) = parse_stl(&bytes, Path::new("<fuzz>")) {
             ACCEPTED.fetch_add(1, Ordering::Relaxed);
+            let polygons: Vec<Vec<DVec3>> = facets.iter().map(|f| f.0.to_vec()).collect();
+            let normals: Vec<DVec3> = facets.iter().map(|f| f.1).collect();
+            mesh_body(&polygons, Some(&normals));
         }
     });
+}
+
+/// A mesh (OBJ polygons, or STL facets with their stored normals) through the steps of a mesh
+/// wall (`mesh_walls`): welded, checked faces; topology, open and closed; volume and mass
+/// properties when closed; elements at an eighth of its extent, and the element count guard at
+/// sizes that would make far too many.
+fn mesh_body(polygons: &[Vec<DVec3>], normals: Option<&[DVec3]>) {
+    let mut size = 0.0f64;
+    for p in polygons.iter().flatten() {
+        size = size.max(p.abs().max_element());
+    }
+    let Ok(surface) = Surface::from_polygons(polygons, normals, 1e-9 * size.max(1e-300)) else {
+        return;
+    };
+    ACCEPTED.fetch_add(1, Ordering::Relaxed);
+    let _ = surface.check_topology(false);
+    if surface.check_topology(true).is_ok() {
+        let _ = surface.volume();
+        let _ = surface.mass_properties(1000.0);
+    }
+    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for &v in &surface.vertices {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let extent = (hi - lo).max_element();
+    for element_size in [extent / 8.0, 1e-3, f64::MIN_POSITIVE] {
+        let count = surface.element_count(element_size);
+        if count <= 1e5 {
+            let _ = checked_elements(&surface, element_size);
+        } else if count > MAX_MESH_ELEMENTS || count.is_nan() {
+            assert!(checked_elements(&surface, element_size).is_err());
+        }
+    }
+}
+
+/// A valid OBJ mesh: a unit cube of quads, one side as two triangles (`a/t/n` forms and
+/// negative indices), with comments and ignored records.
+const CUBE_OBJ: &str = "# cube\no cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nvt 0 0\nvn 0 0 1\ng sides\ns off\nf 1 4 3 2\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\nf 5/1/1 6/1/1 7/1/1\nf -4//1 -2//1 -1//1 # top\n";
+
+fn obj_body(bytes: &[u8]) {
+    let text = String::from_utf8_lossy(bytes);
+    if let Ok(polygons) = parse_obj(&text, Path::new("<fuzz>")) {
+        mesh_body(&polygons, None);
+    }
+}
+
+/// OBJ meshes: byte-level mutations of a valid cube, structured random meshes (vertex values
+/// from a pool with non-finite and huge numbers, face indices in and out of range, faces of 0 to
+/// 6 corners) and raw bytes; STL facets go through the same mesh steps.
+#[test]
+fn fuzz_obj_meshes() {
+    assert!(parse_obj(CUBE_OBJ, Path::new("cube.obj"))
+        .map(|p| {
+            let s = Surface::from_polygons(&p, None, 1e-9).unwrap();
+            s.check_topology(true).is_ok() && (s.volume() - 1.0).abs() < 1e-12
+        })
+        .unwrap());
+    let number = prop_oneof![
+        (0u32..4).prop_map(|k| k as f64),
+        -2.0..2.0f64,
+        (0u32..6).prop_map(|k| [f64::NAN, f64::INFINITY, 1e300, -1e-300, 1e9, 0.5][k as usize]),
+        any::<f64>(),
+    ];
+    let line = prop_oneof![
+        3 => (number.clone(), number.clone(), number).prop_map(|(a, b, c)| format!("v {a:?} {b:?} {c:?}")),
+        3 => prop::collection::vec((-10i64..12, 0u8..3), 0..7).prop_map(|v| {
+            let words: Vec<String> = v
+                .iter()
+                .map(|&(i, form)| match form {
+                    0 => i.to_string(),
+                    1 => format!("{i}/1/1"),
+                    _ => format!("{i}//2"),
+                })
+                .collect();
+            format!("f {}", words.join(" "))
+        }),
+        1 => "[a-z #/0-9.\\-]{0,16}",
+    ];
+    let structured = prop::collection::vec(line, 0..40).prop_map(|l| l.join("\n").into_bytes());
+    let strategy = prop_oneof![
+        mutated(CUBE_OBJ.as_bytes().to_vec()),
+        structured,
+        prop::collection::vec(any::<u8>(), 0..300),
+    ];
+    fuzz("obj", strategy, |bytes| obj_body(&bytes));
 }
 
 /// A valid checkpoint of the small case, its simulation, and the case.
@@ -374,6 +467,10 @@ fn fuzz_corpus_regressions() {
         let _ = parse_rows(&String::from_utf8_lossy(&bytes), &path, 2);
         let _ = parse_stl(&bytes, &path);
     }
+    for (path, bytes) in corpus("obj") {
+        eprintln!("replaying {}", path.display());
+        obj_body(&bytes);
+    }
     let (_, loaded) = checkpoint_bytes();
     for (path, bytes) in corpus("checkpoint") {
         eprintln!("replaying {}", path.display());
@@ -411,4 +508,17 @@ fn hostile_inputs_are_refused() {
     let e = bisph_io::shapes::read_stl(&file).unwrap_err();
     assert!(e.contains("non-finite"), "{e}");
     let _ = std::fs::remove_file(&file);
+    // OBJ: a non-finite vertex is refused by name; a vertex far off (or a mesh in the wrong
+    // units) would once have made elements without bound at the case's element size.
+    let nan = CUBE_OBJ.replace("v 1 1 1", "v 1 nan 1");
+    let e = parse_obj(&nan, Path::new("nan.obj")).unwrap_err();
+    assert!(e.contains("nan.obj:9") && e.contains("finite"), "{e}");
+    let far = "v 0 0 0\nv 1e12 0 0\nv 0 1e12 0\nf 1 2 3\n";
+    let p = parse_obj(far, Path::new("far.obj")).unwrap();
+    let s = Surface::from_polygons(&p, None, 1e-9).unwrap();
+    let e = checked_elements(&s, 0.01).unwrap_err();
+    assert!(
+        e.contains("boundary elements") && e.contains("units"),
+        "{e}"
+    );
 }
