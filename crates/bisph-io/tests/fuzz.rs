@@ -15,6 +15,7 @@ use bisph_io::build::build_simulation;
 use bisph_io::checkpoint::{self, Checkpoint, SimState};
 use bisph_io::mesh_walls::{checked_elements, MAX_MESH_ELEMENTS};
 use bisph_io::shapes::{parse_obj, parse_rows, parse_stl};
+use bisph_io::shepard::parse_points;
 use bisph_io::{parse_case, resources};
 use glam::DVec2;
 use glam::DVec3;
@@ -346,6 +347,29 @@ fn obj_body(bytes: &[u8]) {
 /// OBJ meshes: byte-level mutations of a valid cube, structured random meshes (vertex values
 /// from a pool with non-finite and huge numbers, face indices in and out of range, faces of 0 to
 /// 6 corners) and raw bytes; STL facets go through the same mesh steps.
+/// The `bisph shepard --points` file: a named error or finite points, one per data line.
+#[test]
+fn fuzz_shepard_points() {
+    let points2 = b"x,y\n0.5,0.25\n# probe\n\n1e-3, 2.5e1\n-0.0,3\n".to_vec();
+    let points3 = b"X,Y,Z\n0,0,0\n0.1,0.2,0.3\n".to_vec();
+    let strategy = prop_oneof![
+        mutated(points2),
+        mutated(points3),
+        prop::collection::vec(any::<u8>(), 0..200),
+    ];
+    fuzz("shepard-points", strategy, |bytes| {
+        let text = String::from_utf8_lossy(&bytes);
+        for dim in [2, 3] {
+            if let Ok(points) = parse_points("<fuzz>", &text, dim) {
+                ACCEPTED.fetch_add(1, Ordering::Relaxed);
+                assert!(points.len() <= text.lines().count());
+                assert!(points.iter().flatten().all(|v| v.is_finite()));
+                assert!(points.iter().all(|p| p[dim..].iter().all(|&v| v == 0.0)));
+            }
+        }
+    });
+}
+
 #[test]
 fn fuzz_obj_meshes() {
     assert!(parse_obj(CUBE_OBJ, Path::new("cube.obj"))
