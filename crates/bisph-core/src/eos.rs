@@ -52,6 +52,20 @@ impl Eos {
         }
     }
 
+    /// Pressure above the background `p0` at depth `d` below a free surface at `p0` in
+    /// hydrostatic equilibrium with this equation of state, `dp/dd = rho(p) g` (the density
+    /// grows with depth), exactly: linear, `rho0 c0^2 (exp(g d / c0^2) - 1)`; Tait with
+    /// `B = rho0 c0^2 / xi`, `B ((1 + (1 - 1/xi) rho0 g d / B)^(xi/(xi-1)) - 1)`.
+    pub fn hydrostatic_pressure(&self, g: f64, depth: f64) -> f64 {
+        match *self {
+            Eos::Linear { rho0, c0, .. } => rho0 * c0 * c0 * (g * depth / (c0 * c0)).exp_m1(),
+            Eos::Tait { rho0, c0, xi, .. } => {
+                let b = rho0 * c0 * c0 / xi;
+                b * ((1.0 + (1.0 - 1.0 / xi) * rho0 * g * depth / b).powf(xi / (xi - 1.0)) - 1.0)
+            }
+        }
+    }
+
     /// Density at pressure `p` (inverse of [`Eos::pressure`]); `None` where no density gives `p`.
     pub fn density(&self, p: f64) -> Option<f64> {
         let rho = match *self {
@@ -97,6 +111,33 @@ impl Eos {
 
 #[cfg(test)]
 mod tests {
+    /// The exact hydrostatic profile satisfies `dp/dd = rho(p) g` (central differences).
+    #[test]
+    fn hydrostatic_profile_balances_the_density() {
+        for eos in [
+            super::Eos::Linear {
+                rho0: 1000.0,
+                c0: 10.0,
+                p0: 0.0,
+            },
+            super::Eos::Tait {
+                rho0: 1000.0,
+                c0: 10.0,
+                p0: 0.0,
+                xi: 7.0,
+            },
+        ] {
+            let (g, step) = (9.81, 1e-4);
+            for d in [0.1, 0.5, 1.0] {
+                let slope = (eos.hydrostatic_pressure(g, d + step)
+                    - eos.hydrostatic_pressure(g, d - step))
+                    / (2.0 * step);
+                let rho = eos.density(eos.hydrostatic_pressure(g, d)).unwrap();
+                assert!((slope / (rho * g) - 1.0).abs() < 1e-8, "{eos:?} {d}");
+            }
+            assert_eq!(eos.hydrostatic_pressure(g, 0.0), 0.0);
+        }
+    }
     use super::*;
 
     fn check(eos: Eos) {

@@ -363,6 +363,10 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             Some(InitialPressure::Named(_)) => true,
             Some(InitialPressure::Value(_)) => false,
         };
+        // "hydrostatic-eos": dp/dd = rho(p) g with the equation of state (a fluid that starts
+        // compressed in equilibrium); "hydrostatic": rho0 g d.
+        let exact_hydrostatic =
+            matches!(&block.pressure, Some(InitialPressure::Named(n)) if n == "hydrostatic-eos");
         for r in points {
             let p = match &block.pressure {
                 Some(InitialPressure::Value(p)) => *p,
@@ -371,7 +375,13 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                         let s = ((r.get(tp.axis) - tp.start) / tp.length).clamp(0.0, 1.0);
                         (0.5 * std::f64::consts::PI * s).cos()
                     });
-                    eos_background(&eos) + taper * eos.rho0() * g * (surface - height(r)).max(0.0)
+                    let depth = (surface - height(r)).max(0.0);
+                    let hydrostatic = if exact_hydrostatic {
+                        eos.hydrostatic_pressure(g, depth)
+                    } else {
+                        eos.rho0() * g * depth
+                    };
+                    eos_background(&eos) + taper * hydrostatic
                 }
                 _ => eos_background(&eos),
             };
@@ -536,7 +546,16 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     };
     let mut walls = Walls::new(elements, bodies, kernel.support);
     walls.stretch = stretch;
-    Ok(Simulation::new(config, fluid, walls, probes))
+    let mut sim = Simulation::new(config, fluid, walls, probes);
+    if case.boundary == crate::case::BoundaryName::Usaw
+        && case
+            .fluid_block
+            .iter()
+            .all(|b| b.mass == crate::case::MassRule::Initial)
+    {
+        sim.vertex_masses_from_density();
+    }
+    Ok(sim)
 }
 
 /// Sets up the free bodies of a case: mass, centre of mass and inertia (given, or from the

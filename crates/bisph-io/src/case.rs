@@ -519,7 +519,10 @@ pub struct FluidBlock {
     pub solid: bool,
     /// Initial velocity.
     pub velocity: Option<Vec<f64>>,
-    /// Initial pressure (default: hydrostatic under gravity, else zero).
+    /// Initial pressure (default: hydrostatic under gravity, else zero): a number,
+    /// `"hydrostatic"` (`rho0 g d` at depth `d`) or `"hydrostatic-eos"` (the exact profile of
+    /// the equation of state, `dp/dd = rho(p) g`, for a fluid that starts compressed in
+    /// equilibrium; use it with `mass = "initial"`).
     pub pressure: Option<InitialPressure>,
     /// Free-surface level along `-g` for the hydrostatic pressure (default: top of the block).
     pub surface: Option<f64>,
@@ -528,7 +531,9 @@ pub struct FluidBlock {
     /// the back wall, zero at the dam face).
     pub pressure_taper: Option<TaperSpec>,
     /// Particle masses: `"reference"` (`rho0 dx^d`, default) or `"initial"` (`rho dx^d` with
-    /// the initial density, for a fluid that starts compressed).
+    /// the initial density, for a fluid that starts compressed). With `boundary = "usaw"` and
+    /// every block `"initial"`, the vertex particles' masses follow: `rho_v V_v` with their
+    /// initial extrapolated densities.
     #[serde(default)]
     pub mass: MassRule,
 }
@@ -1240,7 +1245,8 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("\"integrated\" gamma is 2-D only, found dim = {}", c.dim),
         );
     }
-    if integrated && !c.body.is_empty() {
+    let moving = |b: &BodySpec| b.motion.is_some() || b.piston.is_some() || b.free.is_some();
+    if integrated && c.body.iter().any(moving) {
         return e(
             "body",
             "the integrated gamma (paper 3, eq 4) is built for fixed walls: use usaw.gamma = \"geometric\" or shepard = \"geometric\" with moving bodies".into(),
@@ -1307,10 +1313,10 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             positive(&format!("{key}.pressure_taper.length"), tp.length)?;
         }
         if let Some(InitialPressure::Named(name)) = &b.pressure {
-            if name != "hydrostatic" {
+            if name != "hydrostatic" && name != "hydrostatic-eos" {
                 return e(
                     &format!("{key}.pressure"),
-                    format!("expected \"hydrostatic\" or a number, found \"{name}\""),
+                    format!("expected \"hydrostatic\", \"hydrostatic-eos\" or a number, found \"{name}\""),
                 );
             }
         }

@@ -266,6 +266,7 @@ impl<V: Vector> Simulation<V> {
                 sim.config.eos.rho0(),
                 cell,
                 sim.config.particle_spacing,
+                period,
             )
             .unwrap_or_default();
         }
@@ -426,6 +427,31 @@ impl<V: Vector> Simulation<V> {
             f.density[i] = (s + f.density_offset[i]) / f.gamma[i];
             f.density_rate[i] = 0.0;
         }
+    }
+
+    /// Semi-analytical walls: vertex masses `m_v = rho_v V_v` from their current extrapolated
+    /// densities (they were built with `rho0 V_v`), the counterpart of the fluid's `"initial"`
+    /// mass rule for a fluid that starts compressed; then the summation offsets (eq 84) and
+    /// the rates again. Call once, before the first step.
+    pub fn vertex_masses_from_density(&mut self) {
+        if !matches!(self.config.wall_model, WallModelChoice::Usaw(_)) {
+            return;
+        }
+        // The last rate evaluation extrapolated the vertex densities from the initial fluid.
+        let rho0 = self.config.eos.rho0();
+        let v = &mut self.walls.vertices;
+        for i in 0..v.len() {
+            v.mass[i] *= v.density[i] / rho0;
+            v.volume[i] = v.mass[i] / v.density[i];
+        }
+        if self.summation() {
+            let sums = self.kernel_sums();
+            let f = &mut self.fluid;
+            for (i, s) in sums.iter().enumerate() {
+                f.density_offset[i] = f.gamma[i] * f.density[i] - s;
+            }
+        }
+        self.refresh_rates();
     }
 
     /// Re-evaluates the rates at the stored state (after editing velocities or densities by

@@ -24,7 +24,7 @@ use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::eos::Eos;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
 use crate::walls::geometric_shepard::radial_moments;
 use glam::DVec2;
@@ -109,7 +109,8 @@ pub fn element_grad_gamma<V: Vector>(
 }
 
 /// `grad gamma_a = sum_s grad gamma_as` (paper 3, eq 10), over every element that can
-/// overlap the support.
+/// overlap the support. On periodic axes the grid hands each element's image shift and the
+/// point is moved by it instead (the element's corners are stored at its own image).
 pub fn grad_gamma<V: Vector>(
     kernel: &Wendland,
     x: V,
@@ -118,8 +119,8 @@ pub fn grad_gamma<V: Vector>(
 ) -> V {
     let mut sum = V::ZERO;
     let radius = kernel.support + elements.max_reach;
-    grid.for_each_candidate_within(x, radius, |j| {
-        sum += element_grad_gamma(kernel, x, elements, j);
+    grid.for_each_candidate_within_shifted(x, radius, |j, image| {
+        sum += element_grad_gamma(kernel, x - image, elements, j);
     });
     sum
 }
@@ -163,20 +164,23 @@ pub struct Vertices<V: Vector> {
 }
 
 impl<V: Vector> Vertices<V> {
-    /// Vertices of 2-D segment elements: coincident corners (closer than `1e-9 dx`) merge.
-    /// `None` when an element is not a segment (3-D).
+    /// Vertices of 2-D segment elements: coincident corners (closer than `1e-9 dx`, in the
+    /// minimum image along periodic axes) merge, so a wall that runs through a periodic
+    /// boundary has one vertex there, kept in the primary period. `None` when an element is
+    /// not a segment (3-D) or the period is too short for the grid.
     pub fn from_elements(
         elements: &BoundaryElements<V>,
         rho0: f64,
         cell_size: f64,
         dx: f64,
+        period: Periodicity<V>,
     ) -> Option<Self> {
         if V::DIM != 2 {
             return None;
         }
         let tol = 1e-9 * dx;
         let mut v = Vertices::<V> {
-            grid: CellGrid::new(cell_size),
+            grid: CellGrid::with_period(cell_size, period).ok()?,
             ..Default::default()
         };
         let mut sum_len: Vec<f64> = Vec::new();
@@ -190,7 +194,11 @@ impl<V: Vector> Vertices<V> {
             }
             let mut ids = [0usize; 2];
             for (k, &p) in c.iter().enumerate() {
-                let found = v.position.iter().position(|&q| (q - p).length() <= tol);
+                let p = period.wrap(p);
+                let found = v
+                    .position
+                    .iter()
+                    .position(|&q| period.minimum_image(q - p).length() <= tol);
                 ids[k] = match found {
                     Some(id) => id,
                     None => {
@@ -221,7 +229,9 @@ impl<V: Vector> Vertices<V> {
             let theta = if adj.len() == 2 {
                 let (a, b) = (to2(adj[0].0), to2(adj[1].0));
                 let turn = a.perp_dot(b).atan2(a.dot(b)).abs();
-                let far = (v.position[adj[0].1] - v.position[id]).dot(adj[1].0);
+                let far = period
+                    .minimum_image(v.position[adj[0].1] - v.position[id])
+                    .dot(adj[1].0);
                 if far > 0.0 {
                     PI - turn
                 } else {
@@ -397,10 +407,10 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
                     ratio,
                 );
             });
-        // Segments.
+        // Segments (at the image next to the particle on periodic axes).
         let radius = kernel.support + elements.max_reach;
-        grid.for_each_candidate_within(a.x, radius, |j| {
-            let gg = element_grad_gamma(kernel, a.x, elements, j);
+        grid.for_each_candidate_within_shifted(a.x, radius, |j, image| {
+            let gg = element_grad_gamma(kernel, a.x - image, elements, j);
             if gg == V::ZERO {
                 return;
             }
@@ -559,7 +569,7 @@ mod tests {
         for s in shapes {
             e.push(s.centre, s.normal, s.area, 0, &s.corners);
         }
-        let v = Vertices::from_elements(&e, 1000.0, 0.2, dx).unwrap();
+        let v = Vertices::from_elements(&e, 1000.0, 0.2, dx, Periodicity::none()).unwrap();
         assert_eq!(v.len(), 40);
         let mut corner = 0;
         for i in 0..v.len() {
