@@ -58,6 +58,12 @@ pub struct PackParams {
     /// Stage 2c stops early when mean `|grad C|` changes by less than this relative amount
     /// over `plateau_window` iterations (0: never).
     pub stage_c_tolerance: f64,
+    /// Per-particle step control: when a particle's shift reverses direction (a shift against
+    /// the previous one: the explicit iteration overshoots, as it does at the boundary push,
+    /// whose ramp is steep at `push_radius`), its step factor is multiplied by this; it grows
+    /// back by `1 / sqrt(step_damping)` per iteration without reversal, up to 1. Fixed points
+    /// are those of eq 15 unchanged. 1 turns it off (plain eq 15).
+    pub step_damping: f64,
     /// Evaluate the metrics over all particles every this many iterations during stage 2a
     /// (default 10; in between only particles near a wall are evaluated, and the metrics are
     /// NaN). Stage 2c evaluates everyone anyway.
@@ -80,6 +86,7 @@ impl PackParams {
             freeze_distance: 0.6,
             stage_c_iterations: 1000,
             stage_c_tolerance: 0.0,
+            step_damping: 0.5,
             report_interval: 10,
         }
     }
@@ -256,6 +263,10 @@ pub struct Packer<V: WallIntegrals> {
     pub start: Vec<V>,
     /// Particles frozen in stage 2b.
     pub frozen: Vec<bool>,
+    /// Step factor of each particle (see [`PackParams::step_damping`]).
+    step: Vec<f64>,
+    /// Each particle's previous (undamped) shift.
+    last_shift: Vec<V>,
     volume: f64,
     grid: CellGrid<V>,
     iteration: usize,
@@ -326,6 +337,12 @@ impl<V: WallIntegrals> Packer<V> {
             "expected a value in [0, 2h/dx]",
         )?;
         check(
+            "step_damping",
+            params.step_damping,
+            params.step_damping > 0.0 && params.step_damping <= 1.0,
+            "expected a value in (0, 1]",
+        )?;
+        check(
             "freeze_distance",
             params.freeze_distance,
             params.freeze_distance >= 0.0,
@@ -356,6 +373,8 @@ impl<V: WallIntegrals> Packer<V> {
             start: positions.clone(),
             positions,
             frozen: vec![false; n],
+            step: vec![1.0; n],
+            last_shift: vec![V::ZERO; n],
             params,
             iteration: 0,
         })
@@ -438,6 +457,22 @@ impl<V: WallIntegrals> Packer<V> {
         if stage != Stage::Start {
             let walls = &self.walls;
             let frozen = &self.frozen;
+            let damping = self.params.step_damping;
+            let growth = 1.0 / damping.sqrt();
+            // Step control (per particle, so independent of the thread count).
+            for (i, e) in evals.iter().enumerate() {
+                if let Some(e) = e {
+                    if !frozen[i] && (stage == Stage::C || e.truncated) {
+                        self.step[i] = if e.shift.dot(self.last_shift[i]) < 0.0 {
+                            self.step[i] * damping
+                        } else {
+                            (self.step[i] * growth).min(1.0)
+                        };
+                        self.last_shift[i] = e.shift;
+                    }
+                }
+            }
+            let step = &self.step;
             let moves: Vec<Option<V>> = evals
                 .par_iter()
                 .zip(self.positions.par_iter())
@@ -448,7 +483,7 @@ impl<V: WallIntegrals> Packer<V> {
                     if !movable {
                         return None;
                     }
-                    let mut shift = e.shift;
+                    let mut shift = e.shift * step[i];
                     // Never cross a wall: halve the shift until the path is clear.
                     if e.distance < walls_reach(e.shift) {
                         for _ in 0..8 {
