@@ -267,6 +267,8 @@ pub struct Packer<V: WallIntegrals> {
     step: Vec<f64>,
     /// Each particle's previous (undamped) shift.
     last_shift: Vec<V>,
+    /// Stage 2a: whether each particle lies within the support of a wall (empty until then).
+    near: Vec<bool>,
     volume: f64,
     grid: CellGrid<V>,
     iteration: usize,
@@ -375,6 +377,7 @@ impl<V: WallIntegrals> Packer<V> {
             frozen: vec![false; n],
             step: vec![1.0; n],
             last_shift: vec![V::ZERO; n],
+            near: Vec::new(),
             params,
             iteration: 0,
         })
@@ -430,16 +433,19 @@ impl<V: WallIntegrals> Packer<V> {
     fn iterate(&mut self, stage: Stage, full: bool) -> IterationStats {
         let walls_present = !self.walls.elements.is_empty();
         // In stage 2a only truncated particles move; those are within the support of a wall.
-        let near: Vec<bool> = if stage == Stage::A && !full {
+        // Only moved particles change their distance, so the flags are kept between iterations
+        // and refreshed for the particles that moved.
+        if stage == Stage::A && self.near.len() != self.positions.len() {
             let kernel = self.kernel;
-            self.positions
+            self.near = self
+                .positions
                 .par_iter()
                 .map(|&x| walls_present && self.walls.distance(x) < kernel.support)
-                .collect()
-        } else {
-            Vec::new()
-        };
+                .collect();
+        }
+        let near = std::mem::take(&mut self.near);
         let evals = self.evaluate(|i| full || stage != Stage::A || near[i]);
+        self.near = near;
         let mut stats = IterationStats {
             iteration: self.iteration,
             stage,
@@ -497,9 +503,13 @@ impl<V: WallIntegrals> Packer<V> {
                     Some(shift)
                 })
                 .collect();
+            let support = self.kernel.support;
             for (i, m) in moves.iter().enumerate() {
                 if let Some(s) = m {
                     self.positions[i] += *s;
+                    if let Some(flag) = self.near.get_mut(i) {
+                        *flag = walls_present && self.walls.distance(self.positions[i]) < support;
+                    }
                     stats.kinetic += 0.5 * self.params.mass * s.length_squared();
                     stats.moved += 1;
                 }
