@@ -648,6 +648,8 @@ pub struct PackSection {
     pub stage_c_iterations: Option<usize>,
     /// Early stop of stage 2c on mean |grad C| (0: off).
     pub stage_c_tolerance: Option<f64>,
+    /// Step factor applied when a particle's shift reverses (0.5; 1: off, plain eq 15).
+    pub step_damping: Option<f64>,
     /// Metrics over all particles every this many iterations in stage 2a (10).
     pub report_interval: Option<usize>,
 }
@@ -1904,6 +1906,7 @@ fn check_pack(loaded: &LoadedCase) -> Result<(), CaseError> {
     range("plateau_tolerance", p.plateau_tolerance, 0.0, 1.0)?;
     range("freeze_distance", p.freeze_distance, 0.0, 4.0)?;
     range("stage_c_tolerance", p.stage_c_tolerance, 0.0, 1.0)?;
+    range("step_damping", p.step_damping, 1e-3, 1.0)?;
     if p.plateau_window == Some(0) {
         return Err(loaded.error("pack.plateau_window", "expected at least 1 iteration"));
     }

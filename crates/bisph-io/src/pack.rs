@@ -41,6 +41,7 @@ pub fn pack_params(case: &Case, dx: f64) -> PackParams {
     q.freeze_distance = p.freeze_distance.unwrap_or(q.freeze_distance);
     q.stage_c_iterations = p.stage_c_iterations.unwrap_or(q.stage_c_iterations);
     q.stage_c_tolerance = p.stage_c_tolerance.unwrap_or(q.stage_c_tolerance);
+    q.step_damping = p.step_damping.unwrap_or(q.step_damping);
     q.report_interval = p.report_interval.unwrap_or(q.report_interval);
     q
 }

@@ -4,7 +4,10 @@
 //! - `discrete`: `gamma(x) = sum_j W(x_j - x) V_j` over the case's initial fluid particles
 //!   (paper 2, eq 4);
 //! - `geometric`: from the wall elements alone (paper 2, eq 8; exact, see
-//!   [`bisph_core::walls::geometric_shepard`]).
+//!   [`bisph_core::walls::geometric_shepard`]);
+//! - `integrated`: the exact `grad gamma` of the walls (paper 3, eqs 9-10) integrated along a
+//!   straight path in the fluid from a point where `gamma = 1` (paper 3, eq 4 as a line
+//!   integral; 2-D; [`bisph_core::walls::integrated_shepard`]).
 //!
 //! Points come from a CSV file with `dim` numbers per line (`x,y` or `x,y,z`); an optional
 //! header line (`x,y[,z]`), blank lines and lines starting with `#` are skipped.
@@ -12,7 +15,7 @@
 use crate::build::{build_simulation, CaseDim};
 use crate::case::LoadedCase;
 use bisph_core::neighbours::CellGrid;
-use bisph_core::walls::geometric_shepard;
+use bisph_core::walls::{geometric_shepard, integrated_shepard};
 use bisph_core::Simulation;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -24,7 +27,8 @@ pub enum ShepardMethod {
     Discrete,
     /// From the walls alone (paper 2).
     Geometric,
-    /// `dgamma/dt = v_rel . grad gamma` (paper 3 eq 4): not implemented yet.
+    /// `grad gamma` of the walls (paper 3, eqs 4, 9-10) integrated along a path from a point
+    /// where `gamma = 1` (2-D; see [`bisph_core::walls::integrated_shepard`]).
     Integrated,
 }
 
@@ -112,12 +116,6 @@ pub fn gamma_at<V: CaseDim>(
     points: &[[f64; 3]],
     method: ShepardMethod,
 ) -> Result<Vec<f64>, String> {
-    if method == ShepardMethod::Integrated {
-        return Err(
-            "--method integrated: dgamma/dt = v_rel . grad gamma (paper 3, eq 4) is not implemented yet; use discrete or geometric"
-                .into(),
-        );
-    }
     let sim: Simulation<V> = build_simulation(loaded).map_err(|e| e.to_string())?;
     let kernel = sim.config.kernel;
     let points: Vec<V> = points.iter().map(|p| V::from_slice(p)).collect();
@@ -129,7 +127,37 @@ pub fn gamma_at<V: CaseDim>(
                 .map(|&x| geometric_shepard::gamma(&kernel, x, &walls.elements, &walls.grid))
                 .collect()
         }
-        _ => {
+        ShepardMethod::Integrated => {
+            let walls = &sim.walls;
+            // Any path that stays in the fluid fits in the walls' bounding box, plus the support.
+            let (mut lo, mut hi) = (V::from_slice(&[f64::MAX; 3]), V::from_slice(&[f64::MIN; 3]));
+            for &c in &walls.elements.corners {
+                lo = lo.min_by_component(c);
+                hi = hi.max_by_component(c);
+            }
+            let max_length = if walls.elements.is_empty() {
+                0.0
+            } else {
+                (hi - lo).length() + 4.0 * kernel.support
+            };
+            points
+                .iter()
+                .enumerate()
+                .map(|(k, &x)| {
+                    integrated_shepard::gamma_by_path(
+                        &kernel,
+                        x,
+                        &walls.elements,
+                        &walls.grid,
+                        1e-13,
+                        max_length,
+                    )
+                    .map(|p| p.gamma)
+                    .map_err(|e| format!("--method integrated, point {}: {e}", k + 1))
+                })
+                .collect::<Result<_, _>>()?
+        }
+        ShepardMethod::Discrete => {
             let fluid = &sim.fluid;
             let mut grid = CellGrid::new(kernel.support);
             grid.rebuild(&fluid.position);

@@ -40,7 +40,7 @@ struct ShepardArgs {
     #[arg(long)]
     points: PathBuf,
     /// `discrete` (sum over the case's fluid particles), `geometric` (walls only, paper 2)
-    /// or `integrated` (not implemented yet).
+    /// or `integrated` (2-D: grad gamma of the walls integrated along a path from gamma = 1).
     #[arg(long, default_value = "geometric")]
     method: bisph_io::shepard::ShepardMethod,
     /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).

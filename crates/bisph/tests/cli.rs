@@ -535,10 +535,57 @@ fn shepard_prints_gamma_and_names_bad_points() {
     assert_eq!(out.status.code(), Some(1));
     let out = bisph(&["shepard", c, "--points", p, "--method", "magic"]);
     assert!(!out.status.success());
-    std::fs::write(&points, "0.1,0.2\n").unwrap();
+}
+
+/// `bisph shepard --method integrated`: grad gamma integrated along a path from gamma = 1
+/// agrees with the geometric gamma on the wall, at the corner, near both and inside; a point
+/// with no path to gamma = 1 is a named error.
+#[test]
+fn shepard_integrated_matches_geometric() {
+    let dir = temp_dir("shepard-integrated");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, VALID).unwrap();
+    let points = dir.join("points.csv");
+    std::fs::write(
+        &points,
+        "x,y\n0.5,0.0\n0.0,0.0\n0.3,0.013\n0.011,0.017\n0.25,0.25\n",
+    )
+    .unwrap();
+    let (p, c) = (points.to_str().unwrap(), case.to_str().unwrap());
+    let table = |method: &str| -> Vec<f64> {
+        let out = bisph(&["shepard", c, "--points", p, "--method", method]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.starts_with("x,y,gamma\n"), "{text}");
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+            .collect()
+    };
+    let (geometric, integrated) = (table("geometric"), table("integrated"));
+    assert_eq!(integrated.len(), 5);
+    for (g, i) in geometric.iter().zip(&integrated) {
+        assert!((g - i).abs() < 1e-10, "geometric {g}, integrated {i}");
+    }
+    assert!((integrated[0] - 0.5).abs() < 1e-10 && (integrated[1] - 0.25).abs() < 1e-10);
+    assert!(integrated[2] < 0.9 && integrated[4] == 1.0);
+    // A channel narrower than twice the support: no point has gamma = 1, a named error.
+    let narrow = VALID
+        .replace("max = [1.0, 1.0]", "max = [1.0, 0.3]")
+        .replace("max = [0.5, 0.5]", "max = [0.5, 0.25]");
+    std::fs::write(&case, narrow).unwrap();
+    std::fs::write(&points, "0.5,0.15\n").unwrap();
     let out = bisph(&["shepard", c, "--points", p, "--method", "integrated"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not implemented"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("point 1") && err.contains("narrower than 2h") && !err.contains("panicked"),
+        "{err}"
+    );
 }
 
 const PACK: &str = r#"

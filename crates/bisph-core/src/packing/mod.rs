@@ -58,6 +58,12 @@ pub struct PackParams {
     /// Stage 2c stops early when mean `|grad C|` changes by less than this relative amount
     /// over `plateau_window` iterations (0: never).
     pub stage_c_tolerance: f64,
+    /// Per-particle step control: when a particle's shift reverses direction (a shift against
+    /// the previous one: the explicit iteration overshoots, as it does at the boundary push,
+    /// whose ramp is steep at `push_radius`), its step factor is multiplied by this; it grows
+    /// back by `1 / sqrt(step_damping)` per iteration without reversal, up to 1. Fixed points
+    /// are those of eq 15 unchanged. 1 turns it off (plain eq 15).
+    pub step_damping: f64,
     /// Evaluate the metrics over all particles every this many iterations during stage 2a
     /// (default 10; in between only particles near a wall are evaluated, and the metrics are
     /// NaN). Stage 2c evaluates everyone anyway.
@@ -80,6 +86,7 @@ impl PackParams {
             freeze_distance: 0.6,
             stage_c_iterations: 1000,
             stage_c_tolerance: 0.0,
+            step_damping: 0.5,
             report_interval: 10,
         }
     }
@@ -256,6 +263,12 @@ pub struct Packer<V: WallIntegrals> {
     pub start: Vec<V>,
     /// Particles frozen in stage 2b.
     pub frozen: Vec<bool>,
+    /// Step factor of each particle (see [`PackParams::step_damping`]).
+    step: Vec<f64>,
+    /// Each particle's previous (undamped) shift.
+    last_shift: Vec<V>,
+    /// Stage 2a: whether each particle lies within the support of a wall (empty until then).
+    near: Vec<bool>,
     volume: f64,
     grid: CellGrid<V>,
     iteration: usize,
@@ -326,6 +339,12 @@ impl<V: WallIntegrals> Packer<V> {
             "expected a value in [0, 2h/dx]",
         )?;
         check(
+            "step_damping",
+            params.step_damping,
+            params.step_damping > 0.0 && params.step_damping <= 1.0,
+            "expected a value in (0, 1]",
+        )?;
+        check(
             "freeze_distance",
             params.freeze_distance,
             params.freeze_distance >= 0.0,
@@ -356,6 +375,9 @@ impl<V: WallIntegrals> Packer<V> {
             start: positions.clone(),
             positions,
             frozen: vec![false; n],
+            step: vec![1.0; n],
+            last_shift: vec![V::ZERO; n],
+            near: Vec::new(),
             params,
             iteration: 0,
         })
@@ -411,16 +433,19 @@ impl<V: WallIntegrals> Packer<V> {
     fn iterate(&mut self, stage: Stage, full: bool) -> IterationStats {
         let walls_present = !self.walls.elements.is_empty();
         // In stage 2a only truncated particles move; those are within the support of a wall.
-        let near: Vec<bool> = if stage == Stage::A && !full {
+        // Only moved particles change their distance, so the flags are kept between iterations
+        // and refreshed for the particles that moved.
+        if stage == Stage::A && self.near.len() != self.positions.len() {
             let kernel = self.kernel;
-            self.positions
+            self.near = self
+                .positions
                 .par_iter()
                 .map(|&x| walls_present && self.walls.distance(x) < kernel.support)
-                .collect()
-        } else {
-            Vec::new()
-        };
+                .collect();
+        }
+        let near = std::mem::take(&mut self.near);
         let evals = self.evaluate(|i| full || stage != Stage::A || near[i]);
+        self.near = near;
         let mut stats = IterationStats {
             iteration: self.iteration,
             stage,
@@ -438,6 +463,22 @@ impl<V: WallIntegrals> Packer<V> {
         if stage != Stage::Start {
             let walls = &self.walls;
             let frozen = &self.frozen;
+            let damping = self.params.step_damping;
+            let growth = 1.0 / damping.sqrt();
+            // Step control (per particle, so independent of the thread count).
+            for (i, e) in evals.iter().enumerate() {
+                if let Some(e) = e {
+                    if !frozen[i] && (stage == Stage::C || e.truncated) {
+                        self.step[i] = if e.shift.dot(self.last_shift[i]) < 0.0 {
+                            self.step[i] * damping
+                        } else {
+                            (self.step[i] * growth).min(1.0)
+                        };
+                        self.last_shift[i] = e.shift;
+                    }
+                }
+            }
+            let step = &self.step;
             let moves: Vec<Option<V>> = evals
                 .par_iter()
                 .zip(self.positions.par_iter())
@@ -448,7 +489,7 @@ impl<V: WallIntegrals> Packer<V> {
                     if !movable {
                         return None;
                     }
-                    let mut shift = e.shift;
+                    let mut shift = e.shift * step[i];
                     // Never cross a wall: halve the shift until the path is clear.
                     if e.distance < walls_reach(e.shift) {
                         for _ in 0..8 {
@@ -462,9 +503,13 @@ impl<V: WallIntegrals> Packer<V> {
                     Some(shift)
                 })
                 .collect();
+            let support = self.kernel.support;
             for (i, m) in moves.iter().enumerate() {
                 if let Some(s) = m {
                     self.positions[i] += *s;
+                    if let Some(flag) = self.near.get_mut(i) {
+                        *flag = walls_present && self.walls.distance(self.positions[i]) < support;
+                    }
                     stats.kinetic += 0.5 * self.params.mass * s.length_squared();
                     stats.moved += 1;
                 }

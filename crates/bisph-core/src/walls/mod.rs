@@ -7,6 +7,7 @@ pub mod bodies;
 pub mod bounce;
 pub mod energy_bi;
 pub mod geometric_shepard;
+pub mod integrated_shepard;
 pub mod shepard_bi;
 pub mod usaw;
 
