@@ -410,7 +410,12 @@ fn fuzz_obj_meshes() {
 
 /// A valid checkpoint of the small case, its simulation, and the case.
 fn checkpoint_bytes() -> (Vec<u8>, bisph_io::LoadedCase) {
-    let loaded = parse_case("<fuzz>", VALID, &[]).unwrap();
+    checkpoint_bytes_of(VALID, &[])
+}
+
+/// A valid checkpoint of the 2-D case `text` (with `overrides`) after one step.
+fn checkpoint_bytes_of(text: &str, overrides: &[String]) -> (Vec<u8>, bisph_io::LoadedCase) {
+    let loaded = parse_case("<fuzz>", text, overrides).unwrap();
     let mut sim = build_simulation::<DVec2>(&loaded).unwrap();
     sim.advance(None).unwrap();
     let mut state = SimState::default();
@@ -469,6 +474,17 @@ fn fuzz_checkpoint() {
         }),
     ];
     fuzz("checkpoint", strategy, |bytes| {
+        checkpoint_body(&bytes, &loaded)
+    });
+}
+
+/// Checkpoints holding a free rigid body (format 4's body section), mutated and re-sealed.
+#[test]
+fn fuzz_checkpoint_free_body() {
+    let text = include_str!("../../../cases/floating-box-2d.toml");
+    let (good, loaded) = checkpoint_bytes_of(text, &["resolution.dx=0.08".into()]);
+    let strategy = prop_oneof![mutated(good.clone()).prop_map(reseal), mutated(good)];
+    fuzz("checkpoint-free-body", strategy, |bytes| {
         checkpoint_body(&bytes, &loaded)
     });
 }
