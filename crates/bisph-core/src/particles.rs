@@ -1,6 +1,7 @@
 //! Fluid particles as a struct of arrays.
 
 use crate::dim::Vector;
+use rayon::prelude::*;
 
 /// State and rates of the fluid particles (struct of arrays, one entry per particle).
 ///
@@ -83,9 +84,16 @@ pub struct PermuteScratch<V> {
     scalars: Vec<f64>,
 }
 
-fn permute_into<T: Copy>(data: &mut Vec<T>, order: &[u32], scratch: &mut Vec<T>) {
+/// `data[i] = data[order[i]]`, gathered in parallel (each slot written once: deterministic).
+fn permute_into<T: Copy + Send + Sync>(data: &mut Vec<T>, order: &[u32], scratch: &mut Vec<T>) {
     scratch.clear();
-    scratch.extend(order.iter().map(|&k| data[k as usize]));
+    let source = &*data;
+    scratch.par_extend(
+        order
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&k| source[k as usize]),
+    );
     std::mem::swap(data, scratch);
 }
 
