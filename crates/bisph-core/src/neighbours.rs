@@ -306,12 +306,8 @@ impl<V: Vector> CellGrid<V> {
     /// `points[j] + shift` is the image of point `j` next to `x` (`shift` is zero without
     /// periodic axes). The caller filters by distance.
     #[inline(always)]
-    pub fn for_each_candidate_shifted(&self, x: V, mut visit: impl FnMut(usize, V)) {
-        if self.periodic {
-            self.for_each_in_periodic_span(x, 1, visit);
-        } else {
-            self.for_each_in_span(x, 1, |j| visit(j, V::ZERO));
-        }
+    pub fn for_each_candidate_shifted(&self, x: V, visit: impl FnMut(usize, V)) {
+        self.for_each_in_span_shifted(x, 1, visit);
     }
 
     /// [`CellGrid::for_each_candidate_within`] with the image shift of each point, as in
@@ -320,20 +316,16 @@ impl<V: Vector> CellGrid<V> {
         &self,
         x: V,
         radius: f64,
-        mut visit: impl FnMut(usize, V),
+        visit: impl FnMut(usize, V),
     ) {
         let span = ((radius * self.inv_cell).ceil() as i64).max(1);
-        if self.periodic {
-            self.for_each_in_periodic_span(x, span, visit);
-        } else {
-            self.for_each_in_span(x, span, |j| visit(j, V::ZERO));
-        }
+        self.for_each_in_span_shifted(x, span, visit);
     }
 
     /// Visits the cells at most `span` cells from the cell of `x`, wrapping around periodic
     /// axes (each cell once, at the image nearest to `x`), with the shift of each cell's image.
     #[inline(always)]
-    fn for_each_in_periodic_span(&self, x: V, span: i64, mut visit: impl FnMut(usize, V)) {
+    fn for_each_in_span_shifted(&self, x: V, span: i64, mut visit: impl FnMut(usize, V)) {
         self.for_each_run(x, span, |run, shift| {
             for &j in run {
                 visit(j as usize, shift);

@@ -48,6 +48,12 @@ impl WallModelChoice {
         )
     }
 
+    /// `true` when the walls carry vertex particles (paper 3, table 1), which also makes
+    /// summation densities (eq 84) available.
+    pub fn has_vertex_particles(&self) -> bool {
+        matches!(self, WallModelChoice::Usaw(_))
+    }
+
     /// `true` when gamma is integrated in time (else recomputed geometrically every step).
     fn integrates_gamma(&self) -> bool {
         match self {
@@ -260,7 +266,7 @@ impl<V: Vector> Simulation<V> {
         sim.wrap_positions();
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
-        if let WallModelChoice::Usaw(_) = sim.config.wall_model {
+        if sim.config.wall_model.has_vertex_particles() {
             sim.walls.vertices = Vertices::from_elements(
                 &sim.walls.elements,
                 sim.config.eos.rho0(),
@@ -391,7 +397,7 @@ impl<V: Vector> Simulation<V> {
 
     /// `true` when the densities come from summation (paper 3, eq 84).
     pub(crate) fn summation(&self) -> bool {
-        self.config.summation_density && matches!(self.config.wall_model, WallModelChoice::Usaw(_))
+        self.config.summation_density && self.config.wall_model.has_vertex_particles()
     }
 
     /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
@@ -434,7 +440,7 @@ impl<V: Vector> Simulation<V> {
     /// mass rule for a fluid that starts compressed; then the summation offsets (eq 84) and
     /// the rates again. Call once, before the first step.
     pub fn vertex_masses_from_density(&mut self) {
-        if !matches!(self.config.wall_model, WallModelChoice::Usaw(_)) {
+        if !self.config.wall_model.has_vertex_particles() {
             return;
         }
         // The last rate evaluation extrapolated the vertex densities from the initial fluid.
