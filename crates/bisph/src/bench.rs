@@ -5,7 +5,8 @@
 //! number of fluid particles, warmed up for three steps, then advanced a fixed number of
 //! Verlet steps (one force evaluation per step, no output).
 //!
-//! Reported per configuration: particle-steps per second, pair interactions per second (fluid
+//! Reported per configuration: particle-steps per second (over all timed steps, and from the
+//! median step time, which other processes on a shared machine disturb less), pair interactions per second (fluid
 //! pairs within the support, each counted from both sides, self included), ns per interaction,
 //! the share of each phase (neighbour search, reordering, forces with their fused wall terms,
 //! wall pressures, the rest of the integration) and the peak memory per particle (peak resident
@@ -195,7 +196,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     };
     let exe = std::env::current_exe().map_err(|e| (1, format!("cannot find bisph itself: {e}")))?;
     println!(
-        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
+        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
         "case",
         "dim",
         "h/dx",
@@ -203,6 +204,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         "particles",
         "neigh",
         "part-steps/s",
+        "median p-s/s",
         "pairs/s",
         "ns/pair",
         "nbr%",
@@ -260,7 +262,7 @@ fn print_row(row: &Value) {
     let f = |key: &str| row[key].as_f64().unwrap_or(f64::NAN);
     let share = |key: &str| 100.0 * f(key) / f("seconds_steps").max(1e-12);
     println!(
-        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
+        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
         row["case"].as_str().unwrap_or("?"),
         f("dim"),
         f("h_over_dx"),
@@ -268,6 +270,7 @@ fn print_row(row: &Value) {
         f("particles"),
         f("neighbours_per_particle"),
         f("particle_steps_per_second"),
+        f("particle_steps_per_second_median"),
         f("pair_interactions_per_second"),
         f("ns_per_interaction"),
         share("seconds_neighbour_search"),
@@ -322,11 +325,14 @@ fn measure<V: CaseDim>(
     }
     let pairs_per_step = sim.count_pairs() as f64;
     sim.timings = Default::default();
-    let start = Instant::now();
+    let mut step_seconds = Vec::with_capacity(config.steps as usize);
     for _ in 0..config.steps {
+        let start = Instant::now();
         sim.advance(None).map_err(|e| (3, e.to_string()))?;
+        step_seconds.push(start.elapsed().as_secs_f64());
     }
-    let seconds = start.elapsed().as_secs_f64();
+    let seconds: f64 = step_seconds.iter().sum();
+    let median = median_of(&mut step_seconds);
     let n = sim.fluid.len() as f64;
     let steps = config.steps as f64;
     let peak = memory_kib("VmHWM:")
@@ -346,11 +352,25 @@ fn measure<V: CaseDim>(
         "particle_steps_per_second": n * steps / seconds,
         "pair_interactions_per_second": pairs, "ns_per_interaction": 1e9 / pairs,
         "seconds_per_step": seconds / steps,
+        "seconds_per_step_median": median,
+        "particle_steps_per_second_median": n / median,
         "seconds_neighbour_search": t.neighbours - t.reorder, "seconds_reorder": t.reorder,
         "seconds_forces": t.rates - t.wall_pressure, "seconds_wall_pressure": t.wall_pressure,
         "seconds_integration": t.steps - t.neighbours - t.rates, "seconds_steps": t.steps,
         "peak_bytes_per_particle": (peak * 1024) as f64 / n,
     }))
+}
+
+/// Median of the step times: on a shared machine, steps slowed by other processes move the
+/// mean but not the median.
+fn median_of(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let k = values.len();
+    match k {
+        0 => f64::NAN,
+        _ if k % 2 == 1 => values[k / 2],
+        _ => 0.5 * (values[k / 2 - 1] + values[k / 2]),
+    }
 }
 
 /// A `/proc/self/status` memory line (`VmRSS:`, `VmHWM:`), in KiB (Linux).
