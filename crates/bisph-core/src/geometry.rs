@@ -236,6 +236,70 @@ pub fn lattice_polygon(points: &[DVec2], dx: f64) -> Vec<DVec2> {
         .collect()
 }
 
+/// A fault in the edge structure of a polygon mesh (faces as lists of vertex indices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeFault {
+    /// Faces `first` and `second` run their shared edge `a -> b` in the same direction: one is
+    /// flipped relative to the other.
+    Flipped {
+        /// The face that ran the edge first.
+        first: usize,
+        /// The face that ran it again.
+        second: usize,
+        /// Edge start vertex.
+        a: u32,
+        /// Edge end vertex.
+        b: u32,
+    },
+    /// The edge `a - b` of `face` is used by `uses` faces: more than two, or (closed meshes)
+    /// other than two.
+    Open {
+        /// The first face using the edge.
+        face: usize,
+        /// How many faces use it.
+        uses: usize,
+        /// One end.
+        a: u32,
+        /// The other end.
+        b: u32,
+    },
+}
+
+/// Checks that neighbouring faces agree on orientation (each shared edge is run once in each
+/// direction) and that no edge has more than two faces, and, when `closed`, that every edge
+/// has exactly two. The open edge reported is the one of the lowest face (then lowest vertex
+/// pair), so the answer does not depend on hashing order.
+pub fn check_edges<F: AsRef<[u32]>>(faces: &[F], closed: bool) -> Result<(), EdgeFault> {
+    use std::collections::HashMap;
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut uses: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
+    for (f, ids) in faces.iter().enumerate() {
+        let ids = ids.as_ref();
+        for k in 0..ids.len() {
+            let (a, b) = (ids[k], ids[(k + 1) % ids.len()]);
+            uses.entry((a.min(b), a.max(b))).or_insert((0, f)).0 += 1;
+            if let Some(&first) = directed.get(&(a, b)) {
+                return Err(EdgeFault::Flipped {
+                    first,
+                    second: f,
+                    a,
+                    b,
+                });
+            }
+            directed.insert((a, b), f);
+        }
+    }
+    let worst = uses
+        .iter()
+        .filter(|(_, &(n, _))| n > 2 || (closed && n != 2))
+        .map(|(&(a, b), &(uses, face))| (face, a, b, uses))
+        .min();
+    match worst {
+        Some((face, a, b, uses)) => Err(EdgeFault::Open { face, uses, a, b }),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

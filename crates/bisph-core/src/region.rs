@@ -4,7 +4,7 @@
 //! point-in-region queries (a point on the boundary is outside) that are exact on vertices
 //! and edges.
 
-use crate::geometry::{polyline_elements, signed_area, ElementShape};
+use crate::geometry::{check_edges, polyline_elements, signed_area, EdgeFault, ElementShape};
 use crate::packing::integrals::segments_intersect;
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
@@ -362,39 +362,37 @@ impl TriMesh {
             }
         }
         // Closedness and orientation: each directed edge once, its reverse once.
-        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
-        let mut undirected: HashMap<(u32, u32), usize> = HashMap::new();
-        for (t, tri) in triangles.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                *undirected.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-                if let Some(&other) = directed.get(&(a, b)) {
-                    let m = (vertices[a as usize] + vertices[b as usize]) * 0.5;
-                    return Err(RegionError::InconsistentOrientation {
-                        first: other,
-                        second: t,
-                        x: m.x,
-                        y: m.y,
-                        z: m.z,
-                    });
-                }
-                directed.insert((a, b), t);
+        let vertex = |i: u32| vertices[i as usize];
+        match check_edges(&triangles, true) {
+            Ok(()) => {}
+            Err(EdgeFault::Flipped {
+                first,
+                second,
+                a,
+                b,
+                ..
+            }) => {
+                let m = (vertex(a) + vertex(b)) * 0.5;
+                return Err(RegionError::InconsistentOrientation {
+                    first,
+                    second,
+                    x: m.x,
+                    y: m.y,
+                    z: m.z,
+                });
             }
-        }
-        let mut bad: Vec<(&(u32, u32), &usize)> =
-            undirected.iter().filter(|(_, &n)| n != 2).collect();
-        bad.sort();
-        if let Some((&(a, b), &uses)) = bad.first() {
-            let (pa, pb) = (vertices[a as usize], vertices[b as usize]);
-            return Err(RegionError::OpenMesh {
-                uses,
-                ax: pa.x,
-                ay: pa.y,
-                az: pa.z,
-                bx: pb.x,
-                by: pb.y,
-                bz: pb.z,
-            });
+            Err(EdgeFault::Open { uses, a, b, .. }) => {
+                let (pa, pb) = (vertex(a), vertex(b));
+                return Err(RegionError::OpenMesh {
+                    uses,
+                    ax: pa.x,
+                    ay: pa.y,
+                    az: pa.z,
+                    bx: pb.x,
+                    by: pb.y,
+                    bz: pb.z,
+                });
+            }
         }
         let volume: f64 = triangles
             .iter()

@@ -3,7 +3,7 @@
 //! at the face centroid, the face's area and unit normal out of the fluid: paper 1, 5.4), mass
 //! properties of the enclosed solid, and the parametric Apollo-like capsule of paper 1, 5.4.
 
-use crate::geometry::ElementShape;
+use crate::geometry::{check_edges, EdgeFault, ElementShape};
 use glam::{DMat3, DVec3};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
@@ -228,46 +228,39 @@ impl Surface {
     /// Checks that neighbouring faces agree on orientation (each shared edge is run once in
     /// each direction) and, when `closed`, that every edge is shared by exactly two faces.
     pub fn check_topology(&self, closed: bool) -> Result<(), SurfaceError> {
-        let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
-        let mut uses: HashMap<(u32, u32), (usize, usize)> = HashMap::new();
-        for (f, ids) in self.faces.iter().enumerate() {
-            for k in 0..ids.len() {
-                let (a, b) = (ids[k], ids[(k + 1) % ids.len()]);
-                let entry = uses.entry((a.min(b), a.max(b))).or_insert((0, f));
-                entry.0 += 1;
-                if let Some(&other) = directed.get(&(a, b)) {
-                    let m = (self.vertices[a as usize] + self.vertices[b as usize]) * 0.5;
-                    return Err(SurfaceError::Inconsistent {
-                        first: other,
-                        second: f,
-                        x: m.x,
-                        y: m.y,
-                        z: m.z,
-                    });
-                }
-                directed.insert((a, b), f);
+        let vertex = |i: u32| self.vertices[i as usize];
+        match check_edges(&self.faces, closed) {
+            Ok(()) => Ok(()),
+            Err(EdgeFault::Flipped {
+                first,
+                second,
+                a,
+                b,
+                ..
+            }) => {
+                let m = (vertex(a) + vertex(b)) * 0.5;
+                Err(SurfaceError::Inconsistent {
+                    first,
+                    second,
+                    x: m.x,
+                    y: m.y,
+                    z: m.z,
+                })
+            }
+            Err(EdgeFault::Open { face, uses, a, b }) => {
+                let (pa, pb) = (vertex(a), vertex(b));
+                Err(SurfaceError::Open {
+                    face,
+                    uses,
+                    ax: pa.x,
+                    ay: pa.y,
+                    az: pa.z,
+                    bx: pb.x,
+                    by: pb.y,
+                    bz: pb.z,
+                })
             }
         }
-        let mut bad: Vec<((u32, u32), usize, usize)> = uses
-            .iter()
-            .filter(|(_, &(n, _))| n > 2 || (closed && n != 2))
-            .map(|(&edge, &(n, f))| (edge, n, f))
-            .collect();
-        bad.sort_by_key(|&(edge, _, f)| (f, edge));
-        if let Some(&((a, b), n, f)) = bad.first() {
-            let (pa, pb) = (self.vertices[a as usize], self.vertices[b as usize]);
-            return Err(SurfaceError::Open {
-                face: f,
-                uses: n,
-                ax: pa.x,
-                ay: pa.y,
-                az: pa.z,
-                bx: pb.x,
-                by: pb.y,
-                bz: pb.z,
-            });
-        }
-        Ok(())
     }
 
     /// Signed enclosed volume (positive when the normals point outward; closed meshes).
