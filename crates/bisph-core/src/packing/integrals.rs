@@ -152,20 +152,131 @@ impl WallIntegrals for DVec2 {
     }
 }
 
-use crate::quadrature::{GL_W, GL_X};
+/// A radial integrand of the 3-D polar rule, `F(q) = A sum_k c_k q^k + B / q` with
+/// `q = rho / h`, whose primitive difference `F(rho / h) - F(|a| / h)` is
+/// `int_0^s f(sqrt(a^2 + u^2)) u du` for the function `f` integrated over the wall.
+#[derive(Clone, Copy, Debug)]
+struct Radial {
+    scale: f64,
+    c: [f64; 8],
+    inv: f64,
+}
 
-/// `int_{T cap B(x, radius)} g_k(|y - x|) dA` over the triangle `tri` for `N` functions at
-/// once, given their radial primitives `big_h(s, a)[k] = int_0^s g_k(sqrt(a^2 + u^2)) u du`
-/// (`a` the signed distance from `x` to the triangle's plane along its corner-order normal),
-/// in polar coordinates about the foot of the perpendicular: the triangle is the signed sum
-/// of the three triangles (foot, edge); on each the radial integral runs to
-/// `min(edge(psi), s_c)`, `s_c = sqrt(radius^2 - a^2)`; the angular integral is Gauss-Legendre
-/// on the pieces where the edge lies inside the circle, exact elsewhere.
+/// `P(q) = q^2/2 - 5q^4/8 + q^5/2 - 5q^6/32 + q^7/56`, the primitive of `w(q) q`.
+const WENDLAND_P: [f64; 8] = [0.0, 0.0, 0.5, 0.0, -0.625, 0.5, -5.0 / 32.0, 1.0 / 56.0];
+/// `Q(q) = 7q^2/32 - 21q^4/128 + 7q^5/64 - 15q^6/512 + 3q^7/1024`, the primitive of
+/// `Fp(q) q` (paper 2, eq 9, sign corrected).
+const SHEPARD_Q: [f64; 8] = [
+    0.0,
+    0.0,
+    7.0 / 32.0,
+    0.0,
+    -21.0 / 128.0,
+    7.0 / 64.0,
+    -15.0 / 512.0,
+    3.0 / 1024.0,
+];
+
+impl Radial {
+    /// The 3-D Wendland kernel: `int_0^s W(sqrt(a^2 + u^2)) u du = alpha h^2 [P(rho/h) -
+    /// P(|a|/h)]`, `alpha h^2 = 21 / (16 pi h)`.
+    fn wendland(kernel: &Wendland) -> Self {
+        Radial {
+            scale: 21.0 / (16.0 * PI * kernel.h),
+            c: WENDLAND_P,
+            inv: 0.0,
+        }
+    }
+
+    /// `a int_0^s F(sqrt(a^2 + u^2)) u du` for paper 2's 3-D `F` (eq 9, sign corrected):
+    /// `F(r) = Fp(q) / (pi h^3) - 1 / (4 pi r^3)`; the primitive of `a F(r) r` is
+    /// `a Q(q) / (pi h) + a / (4 pi r)`.
+    fn shepard(kernel: &Wendland, a: f64) -> Self {
+        Radial {
+            scale: a / (PI * kernel.h),
+            c: SHEPARD_Q,
+            inv: a / (4.0 * PI * kernel.h),
+        }
+    }
+
+    /// `F(q)`.
+    fn value(&self, q: f64) -> f64 {
+        let poly = self.c.iter().rev().fold(0.0, |acc, &c| acc * q + c);
+        let inv = if self.inv != 0.0 { self.inv / q } else { 0.0 };
+        self.scale * poly + inv
+    }
+
+    /// `sum_k c_k K_k` over the angular moments of [`angular_moments`].
+    fn combine(&self, k: &[f64; 9]) -> f64 {
+        let poly: f64 = self.c.iter().zip(k).map(|(c, k)| c * k).sum();
+        self.scale * poly + self.inv * k[8]
+    }
+}
+
+/// Closed-form angular moments of the polar rule: with `u = d tan(psi)` the coordinate
+/// along an edge at distance `d` from the foot of the perpendicular and `q^2 = a^2 + d^2 +
+/// u^2` (lengths in units of `h`), `K_k = int_{u0}^{u1} q^k d / (d^2 + u^2) du`, i.e.
+/// `int q^k dpsi`, for `k = 0..=7` (entry `k`) and `k = -1` (entry 8); `dpsi` is the angle
+/// the piece subtends. With `c^2 = a^2 + d^2` and `R = sqrt(c^2 + u^2)`:
+/// `(c^2 + u^2)^m = q_m(u^2) (d^2 + u^2) + a^(2m)`, so `K_2m = d int q_m du + a^(2m) dpsi` and
+/// `K_(2m+1) = d int q_m R du + a^(2m) K_1` with `K_1 = [d asinh(u/c) + |a| atan(|a| u /
+/// (d R))]` and `K_-1 = [atan(|a| u / (d R))] / |a|`; `int u^(2j) R du` by the recursion
+/// `S_n = (u^(n-1) R^3 - (n-1) c^2 S_(n-2)) / (n+2)`. The logarithms and arc tangents enter
+/// as differences, one call each.
+fn angular_moments(a: f64, d: f64, u0: f64, u1: f64, dpsi: f64) -> [f64; 9] {
+    let (a2, d2) = (a * a, d * d);
+    let c2 = a2 + d2;
+    let (r0, r1) = ((c2 + u0 * u0).sqrt(), (c2 + u1 * u1).sqrt());
+    // asinh(u1/c) - asinh(u0/c) = ln(g(u1) / g(u0)), g(u) = u + R, written c^2 / (R - u)
+    // for u < 0 (no cancellation).
+    let g = |u: f64, r: f64| if u >= 0.0 { u + r } else { c2 / (r - u) };
+    let d_asn = (g(u1, r1) / g(u0, r0)).ln();
+    let abs_a = a.abs();
+    // atan(x1) - atan(x0) = atan2(x1 - x0, 1 + x0 x1), x = |a| u / (d R).
+    let (x0, x1) = (abs_a * u0 / (d * r0), abs_a * u1 / (d * r1));
+    let d_at = (x1 - x0).atan2(1.0 + x0 * x1);
+    let k1 = d * d_asn + abs_a * d_at;
+    let k_inv = if abs_a > 0.0 {
+        d_at / abs_a
+    } else {
+        u1 / (d * r1) - u0 / (d * r0)
+    };
+    // Quotients q_2 = x + (2c^2 - d^2), q_3 = x^2 + (3c^2 - d^2) x + (3c^4 - 3c^2 d^2 + d^4).
+    let q2_0 = 2.0 * c2 - d2;
+    let (q3_0, q3_1) = (c2 * (3.0 * c2 - 3.0 * d2) + d2 * d2, 3.0 * c2 - d2);
+    let du = u1 - u0;
+    let du3 = u1 * u1 * u1 - u0 * u0 * u0;
+    let du5 = u1.powi(5) - u0.powi(5);
+    let s0 = 0.5 * (u1 * r1 - u0 * r0 + c2 * d_asn);
+    let s2 = (u1 * r1 * r1 * r1 - u0 * r0 * r0 * r0 - c2 * s0) / 4.0;
+    let s4 = (u1.powi(3) * r1.powi(3) - u0.powi(3) * r0.powi(3) - 3.0 * c2 * s2) / 6.0;
+    let (a4, a6) = (a2 * a2, a2 * a2 * a2);
+    [
+        dpsi,
+        k1,
+        d * du + a2 * dpsi,
+        d * s0 + a2 * k1,
+        d * (q2_0 * du + du3 / 3.0) + a4 * dpsi,
+        d * (q2_0 * s0 + s2) + a4 * k1,
+        d * (q3_0 * du + q3_1 * du3 / 3.0 + du5 / 5.0) + a6 * dpsi,
+        d * (q3_0 * s0 + q3_1 * s2 + s4) + a6 * k1,
+        k_inv,
+    ]
+}
+
+/// `int_{T cap B(x, radius)} f_k(|y - x|) dA` over the triangle `tri` for `N` functions at
+/// once, given as [`Radial`] primitives by `radial(a)` (`a` the signed distance from `x` to
+/// the triangle's plane along its corner-order normal), in polar coordinates about the foot
+/// of the perpendicular: the triangle is the signed sum of the three triangles (foot, edge);
+/// on each the radial integral runs to `min(edge(psi), s_c)`, `s_c = sqrt(radius^2 - a^2)`;
+/// the angular integral is exact: the primitives times the angle where the circle clips, the
+/// closed-form moments of [`angular_moments`] where the edge lies inside the circle.
 fn polar_triangle<const N: usize>(
     x: DVec3,
     tri: [DVec3; 3],
     radius: f64,
-    big_h: impl Fn(f64, f64) -> [f64; N],
+    h: f64,
+    radial: impl Fn(f64) -> [Radial; N],
 ) -> [f64; N] {
     let mut total = [0.0; N];
     let m = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
@@ -184,7 +295,15 @@ fn polar_triangle<const N: usize>(
     let e2 = nn.cross(e1);
     let p = tri.map(|v| DVec2::new((v - foot).dot(e1), (v - foot).dot(e2)));
     let scale = (tri[1] - tri[0]).length().max(sc);
-    let h_clip = big_h(sc, a);
+    let f = radial(a);
+    let q_a = a.abs() / h;
+    let f_a = f.map(|f| f.value(q_a));
+    let mut f_clip = [0.0; N];
+    for k in 0..N {
+        f_clip[k] = f[k].value(radius / h) - f_a[k];
+    }
+    // Angle subtended from the foot by the edge piece u0..u1 at distance d.
+    let angle = |d: f64, u0: f64, u1: f64| (d * (u1 - u0)).atan2(d * d + u0 * u1);
     for k in 0..3 {
         let (pa, pb) = (p[k], p[(k + 1) % 3]);
         let edge = pb - pa;
@@ -199,84 +318,27 @@ fn polar_triangle<const N: usize>(
         }
         let sign = cross.signum();
         let e = edge / len;
-        let (psi_a, psi_b) = (pa.dot(e).atan2(d), pb.dot(e).atan2(d));
-        // Angular ranges where the radial integral is clipped (|psi| > psi_star).
-        let (clipped, lo, hi) = if d >= sc {
-            (psi_b - psi_a, 0.0, 0.0)
-        } else {
-            let psi_star = (d / sc).acos();
-            (
-                (psi_b.min(-psi_star) - psi_a).max(0.0) + (psi_b - psi_a.max(psi_star)).max(0.0),
-                psi_a.max(-psi_star),
-                psi_b.min(psi_star),
-            )
-        };
-        for (t, h) in total.iter_mut().zip(h_clip) {
-            *t += sign * h * clipped;
-        }
-        if hi > lo {
-            let v = gauss_multi(lo, hi, &|psi: f64| big_h(d / psi.cos(), a));
-            for (t, h) in total.iter_mut().zip(v) {
-                *t += sign * h;
+        let (ua, ub) = (pa.dot(e), pb.dot(e));
+        let whole = angle(d, ua, ub);
+        // The piece of the edge inside the circle, |u| < u_star; the rest is clipped.
+        let mut clipped = whole;
+        if d < sc {
+            let u_star = (sc * sc - d * d).sqrt();
+            let (u0, u1) = (ua.max(-u_star), ub.min(u_star));
+            if u1 > u0 {
+                let inside = angle(d, u0, u1);
+                clipped = whole - inside;
+                let moments = angular_moments(a / h, d / h, u0 / h, u1 / h, inside);
+                for n in 0..N {
+                    total[n] += sign * (f[n].combine(&moments) - f_a[n] * inside);
+                }
             }
+        }
+        for (t, h) in total.iter_mut().zip(f_clip) {
+            *t += sign * h * clipped;
         }
     }
     total
-}
-
-/// Composite 8-point Gauss-Legendre rule for `N` integrands over `[a, b]`, panels of at most
-/// `0.4` rad.
-fn gauss_multi<const N: usize>(a: f64, b: f64, f: &impl Fn(f64) -> [f64; N]) -> [f64; N] {
-    let panels = ((b - a) / 0.4).ceil().max(1.0) as usize;
-    let width = (b - a) / panels as f64;
-    let half = 0.5 * width;
-    let mut sum = [0.0; N];
-    for p in 0..panels {
-        let mid = a + (p as f64 + 0.5) * width;
-        for k in 0..4 {
-            let d = half * GL_X[k];
-            let (l, r) = (f(mid - d), f(mid + d));
-            for n in 0..N {
-                sum[n] += GL_W[k] * half * (l[n] + r[n]);
-            }
-        }
-    }
-    sum
-}
-
-/// Radial primitive of the 3-D Wendland kernel: `int_0^s W(sqrt(a^2 + u^2)) u du`
-/// `= alpha h^2 [P(rho/h) - P(|a|/h)]`, `P(q) = q^2/2 - 5q^4/8 + q^5/2 - 5q^6/32 + q^7/56`.
-fn wendland_radial_3d(kernel: &Wendland, s: f64, a: f64) -> f64 {
-    let h = kernel.h;
-    let p = |q: f64| {
-        let q2 = q * q;
-        q2 * (0.5 + q2 * (-0.625 + q * (0.5 + q * (-5.0 / 32.0 + q / 56.0))))
-    };
-    let rho = (a * a + s * s).sqrt();
-    let alpha_h2 = 21.0 / (16.0 * PI * h);
-    alpha_h2 * (p((rho / h).min(2.0)) - p((a.abs() / h).min(2.0)))
-}
-
-/// `a * int_0^s F(sqrt(a^2 + u^2)) u du` for paper 2's 3-D `F` (eq 9, sign corrected):
-/// `F(r) = Fp(q) / (pi h^3) - 1 / (4 pi r^3)`, `Fp = 21q^5/1024 - 45q^4/256 + 35q^3/64
-/// - 21q^2/32 + 7/16`; the primitive of `F(r) r` is `Q(q) / (pi h) + 1 / (4 pi r)`.
-fn shepard_radial_3d(kernel: &Wendland, s: f64, a: f64) -> f64 {
-    let h = kernel.h;
-    let q_prim = |q: f64| {
-        let q2 = q * q;
-        q2 * (7.0 / 32.0
-            + q2 * (-21.0 / 128.0 + q * (7.0 / 64.0 + q * (-15.0 / 512.0 + q * 3.0 / 1024.0))))
-    };
-    let rho = (a * a + s * s).sqrt();
-    let abs_a = a.abs();
-    let sign = if a > 0.0 {
-        1.0
-    } else if a < 0.0 {
-        -1.0
-    } else {
-        0.0
-    };
-    a * (q_prim(rho / h) - q_prim(abs_a / h)) / (PI * h) + a / (4.0 * PI * rho) - sign / (4.0 * PI)
 }
 
 /// Triangles of a planar polygon element (a fan from its first corner).
@@ -453,8 +515,8 @@ impl WallIntegrals for DVec3 {
             .map(|tri| {
                 // The polar rule measures a along the corner-order normal.
                 orientation(&tri, normal)
-                    * polar_triangle(x, tri, kernel.support, |s, a| {
-                        [shepard_radial_3d(kernel, s, a)]
+                    * polar_triangle(x, tri, kernel.support, kernel.h, |a| {
+                        [Radial::shepard(kernel, a)]
                     })[0]
             })
             .sum()
@@ -462,7 +524,7 @@ impl WallIntegrals for DVec3 {
     fn element_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
         let r = radius.min(kernel.support);
         fan(corners)
-            .map(|tri| polar_triangle(x, tri, r, |s, a| [wendland_radial_3d(kernel, s, a)])[0])
+            .map(|tri| polar_triangle(x, tri, r, kernel.h, |_| [Radial::wendland(kernel)])[0])
             .sum()
     }
     fn element_gamma_and_integral(
@@ -478,11 +540,8 @@ impl WallIntegrals for DVec3 {
                 out.1 += w;
                 continue;
             }
-            let v = polar_triangle(x, tri, kernel.support, |s, a| {
-                [
-                    shepard_radial_3d(kernel, s, a),
-                    wendland_radial_3d(kernel, s, a),
-                ]
+            let v = polar_triangle(x, tri, kernel.support, kernel.h, |a| {
+                [Radial::shepard(kernel, a), Radial::wendland(kernel)]
             });
             out.0 += orientation(&tri, normal) * v[0];
             out.1 += v[1];
@@ -688,11 +747,11 @@ mod tests {
             DVec3::new(0.125, 0.09, -0.03),
         ];
         let (g, w) = far_triangle(&kernel, x, &tri).expect("far enough");
-        let exact_w = polar_triangle(x, tri, kernel.support, |s, a| {
-            [wendland_radial_3d(&kernel, s, a)]
+        let exact_w = polar_triangle(x, tri, kernel.support, kernel.h, |_| {
+            [Radial::wendland(&kernel)]
         })[0];
-        let exact_g = polar_triangle(x, tri, kernel.support, |s, a| {
-            [shepard_radial_3d(&kernel, s, a)]
+        let exact_g = polar_triangle(x, tri, kernel.support, kernel.h, |a| {
+            [Radial::shepard(&kernel, a)]
         })[0];
         assert!(
             (w - exact_w).abs() < 1e-4 * exact_w.abs(),
@@ -702,6 +761,33 @@ mod tests {
             (g - exact_g).abs() < 1e-4 * exact_g.abs(),
             "{g} vs {exact_g}"
         );
+    }
+
+    /// The closed-form angular moments against Gauss-Legendre in `t`, `u = d sinh(t)`
+    /// (`int q^k d / (d^2 + u^2) du = int q^k / cosh(t) dt`, smooth), including a point in the triangle's plane (`a = 0`)
+    /// and one close to an edge's line (small `d`).
+    #[test]
+    fn angular_moments_match_quadrature() {
+        for (a, d, u0, u1) in [
+            (0.3, 0.7, -0.4, 1.1),
+            (-1.2, 0.2, 0.05, 1.5),
+            (0.0, 0.5, -1.0, 0.3),
+            (1e-3, 1.9, -0.2, 0.25),
+            (0.8, 1e-3, -1.7, 1.6),
+        ] {
+            let moments = angular_moments(a, d, u0, u1, f64::atan2(u1, d) - f64::atan2(u0, d));
+            for (k, &exact) in moments.iter().enumerate() {
+                let power = if k == 8 { -1 } else { k as i32 };
+                let num = gauss_n((u0 / d).asinh(), (u1 / d).asinh(), 400, |t| {
+                    let u = d * t.sinh();
+                    (a * a + d * d + u * u).sqrt().powi(power) / t.cosh()
+                });
+                assert!(
+                    (exact - num).abs() < 1e-11 * num.abs().max(1e-3),
+                    "a={a} d={d} k={power}: {exact} vs {num}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -233,9 +233,28 @@ impl<V: WallIntegrals> PackWalls<V> {
         let e = &self.elements;
         let mut d = f64::INFINITY;
         self.grid.for_each_candidate(x, |j| {
-            d = d.min(V::element_distance(x, e.current_corners(j)));
+            // An element whose bounding sphere lies beyond the best so far cannot be nearer.
+            if (e.centre[j] - x).length() - e.reach[j] < d {
+                d = d.min(V::element_distance(x, e.current_corners(j)));
+            }
         });
         d
+    }
+
+    /// `true` when some element lies closer than `radius` to `x` (`radius` at most the
+    /// grid's reach, the support).
+    pub fn within(&self, x: V, radius: f64) -> bool {
+        let e = &self.elements;
+        let mut found = false;
+        self.grid.for_each_candidate(x, |j| {
+            if !found
+                && (e.centre[j] - x).length() < radius + e.reach[j]
+                && V::element_distance(x, e.current_corners(j)) < radius
+            {
+                found = true;
+            }
+        });
+        found
     }
 }
 
@@ -269,6 +288,9 @@ pub struct Packer<V: WallIntegrals> {
     last_shift: Vec<V>,
     /// Stage 2a: whether each particle lies within the support of a wall (empty until then).
     near: Vec<bool>,
+    /// Each particle's last wall sample and the position it was taken at: a particle that
+    /// has not moved since (the frozen layer, rejected shifts) reuses it, bit for bit.
+    wall_cache: Vec<Option<(V, WallSample<V>)>>,
     volume: f64,
     grid: CellGrid<V>,
     iteration: usize,
@@ -378,6 +400,7 @@ impl<V: WallIntegrals> Packer<V> {
             step: vec![1.0; n],
             last_shift: vec![V::ZERO; n],
             near: Vec::new(),
+            wall_cache: vec![None; n],
             params,
             iteration: 0,
         })
@@ -393,20 +416,29 @@ impl<V: WallIntegrals> Packer<V> {
     fn evaluate(&mut self, select: impl Fn(usize) -> bool + Sync) -> Vec<Option<Evaluation<V>>> {
         self.grid.rebuild(&self.positions);
         let (kernel, walls, grid, pos) = (&self.kernel, &self.walls, &self.grid, &self.positions);
+        let cache = &mut self.wall_cache;
         let p = &self.params;
         let volume = self.volume;
         let d_coef = p.diffusion * p.h * p.h;
         let cap = p.max_shift * p.dx;
         let push_radius = p.push_radius * p.dx;
-        (0..pos.len())
-            .into_par_iter()
+        cache
+            .par_iter_mut()
+            .enumerate()
             .with_min_len(256)
-            .map(|i| {
+            .map(|(i, slot)| {
                 if !select(i) {
                     return None;
                 }
                 let x = pos[i];
-                let w = walls.sample(kernel, x, push_radius);
+                let w = match slot {
+                    Some((at, w)) if *at == x => *w,
+                    _ => {
+                        let w = walls.sample(kernel, x, push_radius);
+                        *slot = Some((x, w));
+                        w
+                    }
+                };
                 let mut sum = V::ZERO;
                 grid.for_each_neighbour(x, pos, kernel.support, |_, r, _| {
                     // grad_a W_ab = grad W(x_a - x_b) = -grad W(r), r = x_b - x_a
@@ -440,7 +472,7 @@ impl<V: WallIntegrals> Packer<V> {
             self.near = self
                 .positions
                 .par_iter()
-                .map(|&x| walls_present && self.walls.distance(x) < kernel.support)
+                .map(|&x| walls_present && self.walls.within(x, kernel.support))
                 .collect();
         }
         let near = std::mem::take(&mut self.near);
@@ -508,7 +540,7 @@ impl<V: WallIntegrals> Packer<V> {
                 if let Some(s) = m {
                     self.positions[i] += *s;
                     if let Some(flag) = self.near.get_mut(i) {
-                        *flag = walls_present && self.walls.distance(self.positions[i]) < support;
+                        *flag = walls_present && self.walls.within(self.positions[i], support);
                     }
                     stats.kinetic += 0.5 * self.params.mass * s.length_squared();
                     stats.moved += 1;
@@ -561,7 +593,7 @@ impl<V: WallIntegrals> Packer<V> {
             self.frozen = self
                 .positions
                 .par_iter()
-                .map(|&x| walls.distance(x) < freeze)
+                .map(|&x| walls.within(x, freeze))
                 .collect();
         }
         // Stage 2c.
