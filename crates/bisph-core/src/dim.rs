@@ -5,7 +5,7 @@
 //! whole solver is monomorphised for it; `V::DIM` branches are constant-folded.
 
 use crate::kernel::Wendland;
-use crate::walls::geometric_shepard;
+use crate::walls::{geometric_shepard, BoundaryElements};
 use glam::{DVec2, DVec3};
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
@@ -90,6 +90,15 @@ pub trait Vector:
         normal: Self,
         area: f64,
     ) -> f64;
+    /// Contribution of one piece of a [`geometric_shepard::GammaCache`] (2-D: a segment;
+    /// 3-D: a planar region by its outline edges) to `gamma(x) - 1`.
+    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64;
+    /// Fills `cache` with the pieces of the current `elements` (merged where they continue
+    /// one straight wall or plane).
+    fn merge_gamma_pieces(
+        elements: &BoundaryElements<Self>,
+        cache: &mut geometric_shepard::GammaCache<Self>,
+    );
 }
 
 impl Vector for DVec2 {
@@ -145,6 +154,16 @@ impl Vector for DVec2 {
         _area: f64,
     ) -> f64 {
         geometric_shepard::segment_contribution(kernel, x, corners[0], corners[1], normal)
+    }
+    #[inline(always)]
+    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
+        geometric_shepard::segment_contribution(kernel, x, corners[0], corners[1], normal)
+    }
+    fn merge_gamma_pieces(
+        elements: &BoundaryElements<Self>,
+        cache: &mut geometric_shepard::GammaCache<Self>,
+    ) {
+        geometric_shepard::merge_segments(elements, cache);
     }
 }
 
@@ -204,6 +223,16 @@ impl Vector for DVec3 {
         area: f64,
     ) -> f64 {
         geometric_shepard::patch_contribution(kernel, x, corners, normal, area)
+    }
+    #[inline(always)]
+    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
+        geometric_shepard::face_contribution(kernel, x, corners, normal)
+    }
+    fn merge_gamma_pieces(
+        elements: &BoundaryElements<Self>,
+        cache: &mut geometric_shepard::GammaCache<Self>,
+    ) {
+        geometric_shepard::merge_faces(elements, cache);
     }
 }
 

@@ -502,6 +502,7 @@ impl<V: Vector> SimState<V> {
         }
         sim.fluid_grid.rebuild(&sim.fluid.position);
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
+        sim.walls.refresh_gamma();
         Ok(())
     }
 }

@@ -266,6 +266,9 @@ impl<V: Vector> Simulation<V> {
         sim.wrap_positions();
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.move_to(0.0);
+        if sim.uses_geometric_gamma() {
+            sim.walls.prepare_gamma(cell);
+        }
         if sim.config.wall_model.has_vertex_particles() {
             sim.walls.vertices = Vertices::from_elements(
                 &sim.walls.elements,
@@ -393,6 +396,16 @@ impl<V: Vector> Simulation<V> {
             &f.velocity,
             dt,
         );
+    }
+
+    /// `true` when some term evaluates the geometric Shepard factor during the run: the
+    /// geometric renormalisation, gamma of the semi-analytical or integrated walls, or the
+    /// viscous Laplacian of the other models (paper 3, eq 18).
+    fn uses_geometric_gamma(&self) -> bool {
+        let model = self.config.wall_model;
+        matches!(model, WallModelChoice::ShepardBi(ShepardKind::Geometric))
+            || model.needs_gamma()
+            || self.config.viscosity.active()
     }
 
     /// `true` when the densities come from summation (paper 3, eq 84).

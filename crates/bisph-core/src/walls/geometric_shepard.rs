@@ -20,7 +20,7 @@
 use super::BoundaryElements;
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Periodicity};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
 
@@ -43,7 +43,7 @@ pub(crate) fn radial_moments(a: f64, u: f64) -> [f64; 5] {
 fn polynomial_integral(a: f64, u0: f64, u1: f64) -> f64 {
     let m1 = radial_moments(a, u1);
     let m0 = radial_moments(a, u0);
-    let d: Vec<f64> = m1.iter().zip(&m0).map(|(x, y)| x - y).collect();
+    let d: [f64; 5] = std::array::from_fn(|k| m1[k] - m0[k]);
     // [q^5/32 - 35q^4/128 + 7q^3/8 - 35q^2/32 + 7/8] / pi
     (d[4] / 32.0 - 35.0 * d[3] / 128.0 + 7.0 * d[2] / 8.0 - 35.0 * d[1] / 32.0 + 7.0 * d[0] / 8.0)
         / PI
@@ -143,7 +143,7 @@ fn edge_integral(a: f64, d: f64, t0: f64, t1: f64) -> f64 {
         let a2 = a * a;
         let big_a = a2 + d * d;
         let (m1, m0) = (moments3(big_a, u1), moments3(big_a, u0));
-        let i: Vec<f64> = m1.iter().zip(&m0).map(|(x, y)| x - y).collect();
+        let i: [f64; 7] = std::array::from_fn(|k| m1[k] - m0[k]);
         let e0 = angle(u1) - angle(u0);
         let tilt = |t: f64| (aa * t).atan2(ad * (big_a + t * t).sqrt());
         // |a| d int dt / ((d^2 + t^2) sqrt(A + t^2)).
@@ -209,24 +209,245 @@ pub fn patch_contribution(
     for k in 0..m {
         let (p0, p1) = (pts[k], pts[(k + 1) % m]);
         twice_area += p0.perp_dot(p1);
-        let edge = p1 - p0;
-        let length = edge.length();
-        if length == 0.0 {
-            continue;
-        }
-        let tau = edge / length;
-        // `p0 x p1 / L`: exactly antisymmetric, so an edge shared by two elements cancels.
-        let d = p0.perp_dot(p1) / length;
-        if d == 0.0 {
-            continue; // the foot is on this edge's line: an empty fan triangle
-        }
-        // Both ends from their own offsets: exact when a corner is next to the foot.
-        sum += edge_integral(a, d, p0.dot(tau), p1.dot(tau));
+        sum += edge_term(a, p0, p1);
     }
     if twice_area < 0.0 {
         -sum
     } else {
         sum
+    }
+}
+
+/// The fan triangle of the edge `p0 -> p1` ([`edge_integral`]), its ends given in the plane
+/// relative to the foot of the perpendicular, in units of `h`.
+fn edge_term(a: f64, p0: DVec2, p1: DVec2) -> f64 {
+    let edge = p1 - p0;
+    let length = edge.length();
+    if length == 0.0 {
+        return 0.0;
+    }
+    let tau = edge / length;
+    // `p0 x p1 / L`: exactly antisymmetric, so an edge shared by two elements cancels.
+    let d = p0.perp_dot(p1) / length;
+    if d == 0.0 {
+        return 0.0; // the foot is on this edge's line: an empty fan triangle
+    }
+    // Both ends from their own offsets: exact when a corner is next to the foot.
+    edge_integral(a, d, p0.dot(tau), p1.dot(tau))
+}
+
+/// Contribution to `gamma(x) - 1` of a planar region with outward normal `n` given by its
+/// boundary edges, `edges[2k] -> edges[2k + 1]`, oriented counter-clockwise about `n`
+/// (paper 2, eqs 8 and 16-17): the sum of their fan triangles, as in
+/// [`patch_contribution`], for any union of coplanar elements (edges shared by two of them
+/// cancel, so only the region's outline is needed).
+pub fn face_contribution(kernel: &Wendland, x: DVec3, edges: &[DVec3], n: DVec3) -> f64 {
+    let h = kernel.h;
+    let Some(&p) = edges.first() else {
+        return 0.0;
+    };
+    let a = (p - x).dot(n) / h;
+    if a.abs() >= 2.0 {
+        return 0.0;
+    }
+    let e1 = n.any_orthonormal_vector();
+    let e2 = n.cross(e1);
+    let foot = x + n * (a * h);
+    let local = |c: DVec3| {
+        let r = (c - foot) / h;
+        DVec2::new(r.dot(e1), r.dot(e2))
+    };
+    edges
+        .chunks_exact(2)
+        .map(|e| edge_term(a, local(e[0]), local(e[1])))
+        .sum()
+}
+
+/// 2-D pieces of a [`GammaCache`]: every maximal run of consecutive elements that continue
+/// one straight wall (each starts exactly where the previous one ends, with the same normal,
+/// perpendicular to both) becomes one segment; other elements stay as they are.
+pub(crate) fn merge_segments(e: &BoundaryElements<DVec2>, cache: &mut GammaCache<DVec2>) {
+    let straight = |c: &[DVec2], n: DVec2| {
+        let d = c[1] - c[0];
+        c.len() == 2 && n.dot(d).abs() <= 1e-12 * d.length()
+    };
+    let mut j = 0;
+    while j < e.len() {
+        let c = e.current_corners(j);
+        let n = e.normal[j];
+        let mut area = e.area[j];
+        if c.len() == 2 && straight(c, n) {
+            let (p0, mut p1) = (c[0], c[1]);
+            let d0 = p1 - p0;
+            while j + 1 < e.len() {
+                let next = e.current_corners(j + 1);
+                if next.len() != 2
+                    || next[0] != p1
+                    || e.normal[j + 1] != n
+                    || (next[1] - next[0]).dot(d0) <= 0.0
+                    || !straight(next, n)
+                {
+                    break;
+                }
+                p1 = next[1];
+                area += e.area[j + 1];
+                j += 1;
+            }
+            cache.push_piece(
+                &[p0, p1],
+                n,
+                area,
+                (p0 + p1) * 0.5,
+                (p1 - p0).length() * 0.5,
+            );
+        } else {
+            cache.push_piece(&c[..2], n, area, e.centre[j], e.reach[j]);
+        }
+        j += 1;
+    }
+}
+
+/// 3-D pieces of a [`GammaCache`]: the elements of one plane (same normal, bit for bit, and
+/// the same offset along it) become one region, the outline left when every edge shared by
+/// two of them (the same two corners, opposite directions) is dropped, with runs of
+/// collinear outline edges joined; each element is first oriented counter-clockwise about
+/// its normal. A box face is then one rectangle of four edges, whatever its mesh.
+pub(crate) fn merge_faces(e: &BoundaryElements<DVec3>, cache: &mut GammaCache<DVec3>) {
+    use std::collections::HashMap;
+    let bits = |p: DVec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    // Corners of element j, counter-clockwise about its normal.
+    let oriented = |j: usize| {
+        let c = e.current_corners(j);
+        let mut newell = DVec3::ZERO;
+        for k in 0..c.len() {
+            newell += c[k].cross(c[(k + 1) % c.len()]);
+        }
+        let mut v = c.to_vec();
+        if newell.dot(e.normal[j]) < 0.0 {
+            v.reverse();
+        }
+        v
+    };
+    let scale = e.max_reach.max(f64::MIN_POSITIVE);
+    let mut planar = Vec::new();
+    for j in 0..e.len() {
+        let (c, n) = (e.current_corners(j), e.normal[j]);
+        if c.len() >= 3 && c.iter().all(|&p| n.dot(p - c[0]).abs() <= 1e-12 * scale) {
+            planar.push((bits(n), n.dot(c[0]), j));
+        } else if c.len() >= 3 {
+            // Not flat: a piece of its own, as the element-by-element sum sees it.
+            let v = oriented(j);
+            let mut edges = Vec::with_capacity(2 * v.len());
+            for k in 0..v.len() {
+                edges.extend([v[k], v[(k + 1) % v.len()]]);
+            }
+            cache.push_piece(&edges, n, e.area[j], e.centre[j], e.reach[j]);
+        }
+    }
+    planar.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut g = 0;
+    while g < planar.len() {
+        let mut end = g + 1;
+        while end < planar.len()
+            && planar[end].0 == planar[g].0
+            && (planar[end].1 - planar[g].1).abs() <= 1e-10 * scale
+        {
+            end += 1;
+        }
+        let mut members: Vec<usize> = planar[g..end].iter().map(|m| m.2).collect();
+        members.sort_unstable();
+        g = end;
+        // Outline: every element's edges, shared ones dropped in pairs.
+        let mut edges: Vec<(DVec3, DVec3)> = Vec::new();
+        let mut area = 0.0;
+        for &j in &members {
+            let v = oriented(j);
+            area += e.area[j];
+            for k in 0..v.len() {
+                edges.push((v[k], v[(k + 1) % v.len()]));
+            }
+        }
+        let mut alive = vec![true; edges.len()];
+        let mut open: HashMap<([u64; 3], [u64; 3]), Vec<usize>> = HashMap::new();
+        for (i, &(p, q)) in edges.iter().enumerate() {
+            if let Some(k) = open.get_mut(&(bits(q), bits(p))).and_then(|v| v.pop()) {
+                alive[k] = false;
+                alive[i] = false;
+            } else {
+                open.entry((bits(p), bits(q))).or_default().push(i);
+            }
+        }
+        let outline: Vec<(DVec3, DVec3)> = edges
+            .iter()
+            .zip(&alive)
+            .filter(|(_, &a)| a)
+            .map(|(&e, _)| e)
+            .collect();
+        if outline.is_empty() {
+            continue;
+        }
+        // Join collinear runs: an edge continues the one ending where it starts when that
+        // corner has exactly one edge in and one out and the two are parallel.
+        let mut starting: HashMap<[u64; 3], Vec<usize>> = HashMap::new();
+        let mut ending: HashMap<[u64; 3], usize> = HashMap::new();
+        for (i, &(p, q)) in outline.iter().enumerate() {
+            starting.entry(bits(p)).or_default().push(i);
+            *ending.entry(bits(q)).or_default() += 1;
+        }
+        let parallel = |i: usize, k: usize| {
+            let (u, v) = (outline[i].1 - outline[i].0, outline[k].1 - outline[k].0);
+            u.dot(v) > 0.0 && u.cross(v).length() <= 1e-12 * u.length() * v.length()
+        };
+        let next = |i: usize| {
+            let q = bits(outline[i].1);
+            match (starting.get(&q).map(Vec::as_slice), ending.get(&q)) {
+                (Some(&[k]), Some(&1)) if k != i && parallel(i, k) => Some(k),
+                _ => None,
+            }
+        };
+        let mut continues = vec![false; outline.len()];
+        for i in 0..outline.len() {
+            if let Some(k) = next(i) {
+                continues[k] = true;
+            }
+        }
+        let mut used = vec![false; outline.len()];
+        let mut corners = Vec::new();
+        let chain = |i: usize, used: &mut Vec<bool>, corners: &mut Vec<DVec3>| {
+            let start = outline[i].0;
+            let mut last = i;
+            used[i] = true;
+            while let Some(k) = next(last) {
+                if used[k] {
+                    break;
+                }
+                used[k] = true;
+                last = k;
+            }
+            corners.extend([start, outline[last].1]);
+        };
+        for i in 0..outline.len() {
+            if !continues[i] && !used[i] {
+                chain(i, &mut used, &mut corners);
+            }
+        }
+        for i in 0..outline.len() {
+            if !used[i] {
+                chain(i, &mut used, &mut corners);
+            }
+        }
+        let (mut lo, mut hi) = (corners[0], corners[0]);
+        for &c in &corners {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+        let centre = (lo + hi) * 0.5;
+        let reach = corners
+            .iter()
+            .map(|&c| (c - centre).length())
+            .fold(0.0, f64::max);
+        let n = e.normal[members[0]];
+        cache.push_piece(&corners, n, area, centre, reach);
     }
 }
 
@@ -243,13 +464,18 @@ pub fn triangle_solid_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 ///
 /// A point on a wall element is first moved `1e-12 h` into the fluid, along the sum of the
 /// inward normals of the elements it lies on (the one-sided limit, exact to about `1e-12`).
-/// Every element that overlaps the support is visited, whatever the grid's cell size.
+/// Every element that overlaps the support is visited, whatever the grid's cell size. When
+/// `elements` carry a [`GammaCache`] built for this kernel (simulations build one), its
+/// merged pieces and candidate lists are used instead of the walk over `grid`.
 pub fn gamma<V: Vector>(
     kernel: &Wendland,
     x: V,
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
 ) -> f64 {
+    if elements.gamma_cache.is_built_for(kernel.support) {
+        return elements.gamma_cache.gamma(kernel, x);
+    }
     let eps = 1e-12 * kernel.h;
     let radius = kernel.support + elements.max_reach;
     // One walk sums the contributions and finds the elements the point lies on; only such a
@@ -285,6 +511,303 @@ pub fn gamma<V: Vector>(
     }
     let mut unused = V::ZERO;
     sum_at(x + shift, &mut unused)
+}
+
+/// Wall pieces prepared for the geometric Shepard factor, with per-cell candidate lists.
+///
+/// `gamma` depends on the wall geometry only, not on how it is cut into elements: the
+/// integral over a segment is the sum of the integrals over its parts. So in 2-D every run of
+/// consecutive elements that continue one straight wall (each starts exactly where the
+/// previous one ends, the same normal, perpendicular to both) becomes one piece, and a
+/// particle near a flat wall evaluates one exact segment integral instead of one per element
+/// within its support. Other elements (3-D polygons, isolated segments) are pieces of their
+/// own. A uniform grid over the pieces (cells of `support / 2` in 2-D, `support` in 3-D)
+/// lists, per cell, every piece (with its periodic image) that comes within the support of
+/// some point of the cell; a point in a cell with an empty list, or outside the grid, has
+/// `gamma = 1` without a walk. Built from the current element corners, so moving and
+/// stretching walls rebuild it when they are placed ([`super::Walls::move_to`]); the sum is
+/// over the cell's list in piece order, independent of threads.
+#[derive(Clone, Debug, Default)]
+pub struct GammaCache<V: Vector> {
+    /// Kernel support the lists hold for; 0 when not built.
+    support: f64,
+    period: Periodicity<V>,
+    /// Corners of every piece, flattened: piece `p` owns `corners[start[p]..start[p + 1]]`.
+    corners: Vec<V>,
+    start: Vec<u32>,
+    normal: Vec<V>,
+    area: Vec<f64>,
+    centre: Vec<V>,
+    reach: Vec<f64>,
+    origin: V,
+    inv_cell: f64,
+    dims: [usize; 3],
+    /// Candidates of cell `c`: `candidates[cell_start[c]..cell_start[c + 1]]`, each a piece
+    /// and the index of its image shift in `shifts`.
+    cell_start: Vec<u32>,
+    candidates: Vec<(u32, u32)>,
+    shifts: Vec<V>,
+}
+
+impl<V: Vector> GammaCache<V> {
+    /// `true` when the lists were built for a kernel of this support.
+    pub fn is_built_for(&self, support: f64) -> bool {
+        self.support > 0.0 && self.support == support
+    }
+
+    /// The support the lists were built for (0 when not built).
+    pub fn support(&self) -> f64 {
+        self.support
+    }
+
+    /// Number of pieces (merged wall segments and other elements).
+    pub fn pieces(&self) -> usize {
+        self.normal.len()
+    }
+
+    /// Corners of piece `p`.
+    fn piece_corners(&self, p: usize) -> &[V] {
+        &self.corners[self.start[p] as usize..self.start[p + 1] as usize]
+    }
+
+    /// Rebuilds the pieces and lists from the current `elements` for kernel support
+    /// `support`, with `period` the periodic axes (elements in the primary period).
+    pub fn rebuild(
+        &mut self,
+        elements: &BoundaryElements<V>,
+        support: f64,
+        period: Periodicity<V>,
+    ) {
+        self.support = support;
+        self.period = period;
+        self.merge_pieces(elements);
+        self.build_lists();
+    }
+
+    /// Pieces from the current elements (see [`merge_segments`], [`merge_faces`]).
+    fn merge_pieces(&mut self, e: &BoundaryElements<V>) {
+        self.corners.clear();
+        self.start.clear();
+        self.start.push(0);
+        self.normal.clear();
+        self.area.clear();
+        self.centre.clear();
+        self.reach.clear();
+        V::merge_gamma_pieces(e, self);
+    }
+
+    /// Appends a piece: its corners (2-D: the segment's two ends; 3-D: its outline edges as
+    /// pairs of ends), outward normal, area, and a centre and reach bounding it.
+    pub(crate) fn push_piece(
+        &mut self,
+        corners: &[V],
+        normal: V,
+        area: f64,
+        centre: V,
+        reach: f64,
+    ) {
+        self.corners.extend_from_slice(corners);
+        self.start.push(self.corners.len() as u32);
+        self.normal.push(normal);
+        self.area.push(area);
+        self.centre.push(centre);
+        self.reach.push(reach);
+    }
+
+    /// The uniform grid over the pieces and each cell's candidates.
+    fn build_lists(&mut self) {
+        let support = self.support;
+        self.shifts.clear();
+        self.candidates.clear();
+        self.cell_start.clear();
+        if self.normal.is_empty() {
+            self.dims = [0; 3];
+            return;
+        }
+        let (mut lo, mut hi) = (self.corners[0], self.corners[0]);
+        for &c in &self.corners {
+            lo = lo.min_by_component(c);
+            hi = hi.max_by_component(c);
+        }
+        for k in 0..V::DIM {
+            if self.period.is_periodic(k) {
+                let m = self.period.min.get(k);
+                lo.set(k, m);
+                hi.set(k, m + self.period.length.get(k));
+            } else {
+                lo.set(k, lo.get(k) - support);
+                hi.set(k, hi.get(k) + support);
+            }
+        }
+        let mut cell = if V::DIM == 2 { 0.5 * support } else { support };
+        let dims = loop {
+            let mut dims = [1usize; 3];
+            for (k, d) in dims.iter_mut().enumerate().take(V::DIM) {
+                *d = (((hi.get(k) - lo.get(k)) / cell).ceil() as usize).max(1);
+            }
+            // Bounded memory for walls spread over a large region.
+            if dims[0] * dims[1] * dims[2] <= 1 << 22 {
+                break dims;
+            }
+            cell *= 2.0;
+        };
+        self.origin = lo;
+        self.inv_cell = 1.0 / cell;
+        self.dims = dims;
+        // Image shifts: every combination of -2..=2 periods along the periodic axes.
+        let mut ranges = [(0i64, 0i64); 3];
+        for (k, r) in ranges.iter_mut().enumerate().take(V::DIM) {
+            if self.period.is_periodic(k) {
+                *r = (-2, 2);
+            }
+        }
+        for a in ranges[0].0..=ranges[0].1 {
+            for b in ranges[1].0..=ranges[1].1 {
+                for c in ranges[2].0..=ranges[2].1 {
+                    let mut s = V::ZERO;
+                    for (k, m) in [a, b, c].into_iter().enumerate().take(V::DIM) {
+                        s.set(k, m as f64 * self.period.length.get(k));
+                    }
+                    self.shifts.push(s);
+                }
+            }
+        }
+        let half_diagonal = 0.5 * cell * (V::DIM as f64).sqrt();
+        let mut pairs: Vec<(u32, u32, u32)> = Vec::new();
+        for p in 0..self.normal.len() {
+            let corners = self.piece_corners(p);
+            let (mut plo, mut phi) = (corners[0], corners[0]);
+            for &c in corners {
+                plo = plo.min_by_component(c);
+                phi = phi.max_by_component(c);
+            }
+            for (si, &s) in self.shifts.iter().enumerate() {
+                // Cells that the piece's box, widened by the support, overlaps.
+                let mut range = [(0usize, 0usize); 3];
+                let mut empty = false;
+                for (k, r) in range.iter_mut().enumerate() {
+                    if k >= V::DIM {
+                        continue;
+                    }
+                    let a = ((plo.get(k) + s.get(k) - support - lo.get(k)) * self.inv_cell).floor();
+                    let b = ((phi.get(k) + s.get(k) + support - lo.get(k)) * self.inv_cell).floor();
+                    let (a, b) = (a.max(0.0), b.min(dims[k] as f64 - 1.0));
+                    if a > b {
+                        empty = true;
+                        break;
+                    }
+                    *r = (a as usize, b as usize);
+                }
+                if empty {
+                    continue;
+                }
+                for cz in range[2].0..=range[2].1 {
+                    for cy in range[1].0..=range[1].1 {
+                        for cx in range[0].0..=range[0].1 {
+                            let mut mid = lo;
+                            for (k, ck) in [cx, cy, cz].into_iter().enumerate().take(V::DIM) {
+                                mid.set(k, lo.get(k) + (ck as f64 + 0.5) * cell);
+                            }
+                            // A lower bound of the distance from the cell's centre.
+                            let distance = if V::DIM == 2 {
+                                segment_distance(mid - s, corners[0], corners[1])
+                            } else {
+                                let sphere = (self.centre[p] + s - mid).length() - self.reach[p];
+                                let plane = self.normal[p].dot(mid - s - corners[0]).abs();
+                                sphere.max(plane)
+                            };
+                            if distance < support + half_diagonal {
+                                let c = cx + dims[0] * (cy + dims[1] * cz);
+                                pairs.push((c as u32, p as u32, si as u32));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Counting sort by cell, stable: each cell's pieces in piece order.
+        let cells = dims[0] * dims[1] * dims[2];
+        self.cell_start.resize(cells + 1, 0);
+        for &(c, _, _) in &pairs {
+            self.cell_start[c as usize + 1] += 1;
+        }
+        for c in 0..cells {
+            self.cell_start[c + 1] += self.cell_start[c];
+        }
+        self.candidates.resize(pairs.len(), (0, 0));
+        let mut fill = self.cell_start.clone();
+        for &(c, p, s) in &pairs {
+            let slot = &mut fill[c as usize];
+            self.candidates[*slot as usize] = (p, s);
+            *slot += 1;
+        }
+    }
+
+    /// The candidates of the cell holding `x` (empty outside the grid).
+    #[inline(always)]
+    fn cell_candidates(&self, x: V) -> &[(u32, u32)] {
+        let mut c = 0usize;
+        let mut stride = 1usize;
+        for k in 0..V::DIM {
+            let v = (x.get(k) - self.origin.get(k)) * self.inv_cell;
+            // Also rejects NaN.
+            if !(v >= 0.0 && v < self.dims[k] as f64) {
+                return &[];
+            }
+            c += v as usize * stride;
+            stride *= self.dims[k];
+        }
+        &self.candidates[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
+    }
+
+    /// Geometric Shepard factor at `x` (paper 2, eq 8), as [`gamma`] but over the cell's
+    /// candidate pieces. The kernel must have the support the lists were built for.
+    pub fn gamma(&self, kernel: &Wendland, x: V) -> f64 {
+        debug_assert!(self.is_built_for(kernel.support));
+        let eps = 1e-12 * kernel.h;
+        let mut shift = V::ZERO;
+        let gamma = self.sum_at(kernel, x, eps, &mut shift);
+        if shift == V::ZERO {
+            return gamma;
+        }
+        let mut unused = V::ZERO;
+        self.sum_at(kernel, x + shift, eps, &mut unused)
+    }
+
+    /// `1 + sum` of the candidates' contributions at `x`; subtracts `eps n` from `shift` for
+    /// each piece `x` lies on.
+    #[inline(always)]
+    fn sum_at(&self, kernel: &Wendland, x: V, eps: f64, shift: &mut V) -> f64 {
+        let x = self.period.wrap(x);
+        let mut gamma = 1.0;
+        for &(p, s) in self.cell_candidates(x) {
+            let p = p as usize;
+            let xs = x - self.shifts[s as usize];
+            let r = self.centre[p] - xs;
+            let (n, reach) = (self.normal[p], self.reach[p]);
+            if r.length_squared() > (self.support + reach) * (self.support + reach) {
+                continue;
+            }
+            let rn = r.dot(n);
+            if rn.abs() < eps && (r - n * rn).length() <= reach * (1.0 + 1e-12) {
+                *shift -= n * eps;
+            }
+            gamma += V::piece_gamma_contribution(kernel, xs, self.piece_corners(p), n);
+        }
+        gamma
+    }
+}
+
+/// Distance from `x` to the segment `p0 -> p1`.
+fn segment_distance<V: Vector>(x: V, p0: V, p1: V) -> f64 {
+    let d = p1 - p0;
+    let l2 = d.length_squared();
+    let t = if l2 > 0.0 {
+        ((x - p0).dot(d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p0 + d * t - x).length()
 }
 
 #[cfg(test)]
@@ -548,6 +1071,177 @@ mod tests {
             let rn = (a - x).dot(n);
             let expected = rn * poly - omega / (4.0 * PI);
             assert!((exact - expected).abs() < 1e-6, "{exact} vs {expected}");
+        }
+    }
+
+    /// Gamma from the cache against the element-by-element walk at `points`.
+    fn cache_matches_walk<V: Vector>(
+        kernel: &Wendland,
+        e: &BoundaryElements<V>,
+        period: Periodicity<V>,
+        points: &[V],
+        tolerance: f64,
+    ) {
+        let mut grid = CellGrid::with_period(kernel.support, period).unwrap();
+        grid.rebuild(&e.centre);
+        let mut cached = e.clone();
+        cached.gamma_cache.rebuild(e, kernel.support, period);
+        assert!(cached.gamma_cache.pieces() <= e.len());
+        for &x in points {
+            let walk = gamma(kernel, x, e, &grid);
+            let fast = gamma(kernel, x, &cached, &grid);
+            assert!(
+                (walk - fast).abs() < tolerance,
+                "at {x:?}: walk {walk} cache {fast}"
+            );
+        }
+    }
+
+    /// A scatter of points over `[lo, hi]` plus the given extra ones.
+    fn scatter_2d(lo: DVec2, hi: DVec2, n: usize, extra: &[DVec2]) -> Vec<DVec2> {
+        let mut s = 12345u64;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut v: Vec<DVec2> = (0..n)
+            .map(|_| lo + (hi - lo) * DVec2::new(next(), next()))
+            .collect();
+        v.extend_from_slice(extra);
+        v
+    }
+
+    #[test]
+    fn cache_merges_straight_walls_and_matches_the_walk() {
+        let kernel = Wendland::new(0.02, 2);
+        let dx = 0.01;
+        let mut e = BoundaryElements::default();
+        for s in box_elements_2d(DVec2::ZERO, DVec2::new(1.0, 0.6), &["+y".into()], dx) {
+            e.push(s.centre, s.normal, s.area, 0, &s.corners);
+        }
+        // A polygon of unequal segments (a circle of 40 sides, radius 0.1) inside the box.
+        let c = DVec2::new(0.5, 0.3);
+        for k in 0..40 {
+            // Unequal sides.
+            let angle = |k: usize| {
+                let t = 2.0 * PI * (k % 40) as f64 / 40.0;
+                t + 0.05 * (3.0 * t).sin()
+            };
+            let (a0, a1) = (angle(k), angle(k + 1));
+            let (p0, p1) = (
+                c + 0.1 * DVec2::new(a0.cos(), a0.sin()),
+                c + 0.1 * DVec2::new(a1.cos(), a1.sin()),
+            );
+            let t = (p1 - p0).normalize();
+            // Fluid outside the circle: normals point into it.
+            e.push(
+                (p0 + p1) * 0.5,
+                DVec2::new(-t.y, t.x),
+                (p1 - p0).length(),
+                1,
+                &[p0, p1],
+            );
+        }
+        let mut cached = e.clone();
+        cached
+            .gamma_cache
+            .rebuild(&e, kernel.support, Periodicity::none());
+        // Bottom, right and left walls, one piece each; the circle's 40 sides.
+        assert_eq!(cached.gamma_cache.pieces(), 3 + 40);
+        let extra = [
+            DVec2::new(0.5, 0.0),
+            DVec2::new(0.503, 0.0),
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(1.0, 0.3),
+            DVec2::new(0.5, 0.2),
+            DVec2::new(0.5, 0.62),
+            DVec2::new(-0.5, 0.3),
+            DVec2::new(0.4, 0.3), // inside the circle (behind its wall)
+        ];
+        let points = scatter_2d(
+            DVec2::new(-0.05, -0.05),
+            DVec2::new(1.05, 0.7),
+            4000,
+            &extra,
+        );
+        cache_matches_walk(&kernel, &e, Periodicity::none(), &points, 1e-12);
+        let mut grid = CellGrid::new(kernel.support);
+        grid.rebuild(&e.centre);
+        let g = |x: f64, y: f64| gamma(&kernel, DVec2::new(x, y), &cached, &grid);
+        assert!((g(0.5, 0.0) - 0.5).abs() < 1e-10);
+        assert!((g(0.503, 0.0) - 0.5).abs() < 1e-10);
+        assert!((g(0.0, 0.0) - 0.25).abs() < 1e-10);
+        assert!((g(1.0, 0.0) - 0.25).abs() < 1e-10);
+        assert_eq!(g(0.25, 0.3), 1.0);
+    }
+
+    #[test]
+    fn cache_sees_periodic_images() {
+        // A channel periodic along x: floor and ceiling cut into elements, the floor's
+        // elements wrapped so that one straddles the period's ends.
+        let kernel = Wendland::new(0.02, 2);
+        let period = Periodicity {
+            min: DVec2::ZERO,
+            length: DVec2::new(0.5, 0.0),
+        };
+        let mut e = BoundaryElements::default();
+        let shapes =
+            crate::geometry::segment_elements(DVec2::new(0.013, 0.0), DVec2::new(0.513, 0.0), 0.01);
+        for s in shapes.into_iter().chain(crate::geometry::segment_elements(
+            DVec2::new(0.5, 0.2),
+            DVec2::new(0.0, 0.2),
+            0.01,
+        )) {
+            let w = period.wrap(s.centre) - s.centre;
+            let corners: Vec<DVec2> = s.corners.iter().map(|&c| c + w).collect();
+            e.push(s.centre + w, s.normal, s.area, 0, &corners);
+        }
+        let points = scatter_2d(
+            DVec2::new(0.0, -0.01),
+            DVec2::new(0.5, 0.21),
+            3000,
+            &[
+                DVec2::new(0.0, 0.0),
+                DVec2::new(0.013, 0.0),
+                DVec2::new(0.4999, 0.2),
+                DVec2::new(0.7, 0.01), // outside the primary period
+            ],
+        );
+        cache_matches_walk(&kernel, &e, period, &points, 1e-12);
+    }
+
+    #[test]
+    fn cache_matches_the_walk_in_3d() {
+        let kernel = Wendland::new(0.1, 3);
+        let mut s = 777u64;
+        let mut next = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut points: Vec<DVec3> = (0..300)
+            .map(|_| DVec3::new(next(), next(), next()) * 1.2 - DVec3::splat(0.1))
+            .collect();
+        points.extend([
+            DVec3::new(0.5, 0.5, 0.0),
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.37, 1.0),
+        ]);
+        for (name, e) in cube_walls(0.05) {
+            // On a wall the walk moves a point 1e-12 h off the wall once per element it lies
+            // on (up to eight triangles), the cache once per face: 1e-10 apart there.
+            cache_matches_walk(&kernel, &e, Periodicity::none(), &points, 1e-10);
+            // Each face one rectangle of four edges.
+            let mut cache = GammaCache::default();
+            cache.rebuild(&e, kernel.support, Periodicity::none());
+            assert_eq!(cache.pieces(), 6, "{name}");
+            for p in 0..6 {
+                assert_eq!(cache.piece_corners(p).len(), 8, "{name}");
+            }
         }
     }
 }

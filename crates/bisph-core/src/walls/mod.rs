@@ -54,6 +54,9 @@ pub struct BoundaryElements<V: Vector> {
     pub corner_start: Vec<u32>,
     /// Current corner points (same layout as `reference_corners`).
     pub corners: Vec<V>,
+    /// Merged wall pieces and per-cell candidate lists for the geometric Shepard factor
+    /// (empty until [`Walls::prepare_gamma`]; rebuilt whenever the walls are placed).
+    pub gamma_cache: geometric_shepard::GammaCache<V>,
 }
 
 impl<V: Vector> BoundaryElements<V> {
@@ -190,6 +193,25 @@ impl<V: Vector> Walls<V> {
         self.place_stretching(true);
         self.wrap_elements();
         self.grid.rebuild(&self.elements.centre);
+        self.refresh_gamma();
+    }
+
+    /// Builds the geometric-gamma cache ([`geometric_shepard::GammaCache`]) for kernel
+    /// support `support` from the current element positions; [`Walls::move_to`] keeps it up
+    /// to date from then on.
+    pub fn prepare_gamma(&mut self, support: f64) {
+        let mut cache = std::mem::take(&mut self.elements.gamma_cache);
+        cache.rebuild(&self.elements, support, self.periodicity);
+        self.elements.gamma_cache = cache;
+    }
+
+    /// Rebuilds the geometric-gamma cache, if one was prepared, from the current element
+    /// positions (after elements were moved other than by [`Walls::move_to`]).
+    pub fn refresh_gamma(&mut self) {
+        let support = self.elements.gamma_cache.support();
+        if support > 0.0 {
+            self.prepare_gamma(support);
+        }
     }
 
     /// Moves every element whose centre left the primary period back by whole periods (its
