@@ -412,27 +412,29 @@ impl<V: Vector> Walls<V> {
         let search = radius + e.max_reach;
         // First pass: the nearest point.
         let mut best: Option<(f64, V)> = None;
-        self.grid.for_each_candidate_within_shifted(x, search, |j, shift| {
-            if let Some((d2, q, _)) = nearest_on_element(e.current_corners(j), shift, x) {
-                if d2 < radius * radius && best.is_none_or(|(b, _)| d2 < b) {
-                    best = Some((d2, q));
+        self.grid
+            .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if let Some((d2, q, _)) = nearest_on_element(e.current_corners(j), shift, x) {
+                    if d2 < radius * radius && best.is_none_or(|(b, _)| d2 < b) {
+                        best = Some((d2, q));
+                    }
                 }
-            }
-        });
+            });
         let (d2, q) = best?;
         let d = d2.sqrt();
         // Second pass: the pseudonormal of the elements sharing that nearest point.
         let eps = 1e-9 * radius;
         let (mut n, mut count, mut interior) = (V::ZERO, 0usize, false);
-        self.grid.for_each_candidate_within_shifted(x, search, |j, shift| {
-            if let Some((dj2, qj, w)) = nearest_on_element(e.current_corners(j), shift, x) {
-                if (dj2.sqrt() - d).abs() <= eps && (qj - q).length() <= eps {
-                    n = n + e.normal[j] * w;
-                    count += 1;
-                    interior |= w >= 2.0 * std::f64::consts::PI;
+        self.grid
+            .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if let Some((dj2, qj, w)) = nearest_on_element(e.current_corners(j), shift, x) {
+                    if (dj2.sqrt() - d).abs() <= eps && (qj - q).length() <= eps {
+                        n = n + e.normal[j] * w;
+                        count += 1;
+                        interior |= w >= 2.0 * std::f64::consts::PI;
+                    }
                 }
-            }
-        });
+            });
         let side = (x - q).dot(n);
         if count == 1 && !interior || side <= 0.0 {
             return Some(-d);
@@ -625,7 +627,11 @@ fn nearest_on_element<V: Vector>(corners: &[V], shift: V, x: V) -> Option<(f64, 
         }
     }
     if inside {
-        return Some(((xv - proj).length_squared(), V::from_slice(&proj.to_array()), 2.0 * PI));
+        return Some((
+            (xv - proj).length_squared(),
+            V::from_slice(&proj.to_array()),
+            2.0 * PI,
+        ));
     }
     let mut best = (f64::INFINITY, DVec3::ZERO, 0.0);
     for k in 0..m {
@@ -684,7 +690,11 @@ mod signed_distance_tests {
         ];
         // The tank as three polylines, as a case lists them (elements of varying length).
         let walls = walls_2d(
-            &[(&tank[..3], false), (&tank[2..4], false), (&tank[3..], false)],
+            &[
+                (&tank[..3], false),
+                (&tank[2..4], false),
+                (&tank[3..], false),
+            ],
             0.037,
         );
         let closed: Vec<DVec2> = tank.iter().copied().chain([DVec2::new(0.0, 1.0)]).collect();
@@ -720,9 +730,16 @@ mod signed_distance_tests {
         }
         assert!(behind > 1000 && front > 1000, "{behind} {front}");
         // Beyond the free top end of the left wall: in front.
-        assert!(walls.signed_distance(DVec2::new(-0.02, 1.03), radius).unwrap() < 0.0);
+        assert!(
+            walls
+                .signed_distance(DVec2::new(-0.02, 1.03), radius)
+                .unwrap()
+                < 0.0
+        );
         // Far from every wall: none.
-        assert!(walls.signed_distance(DVec2::new(1.0, 0.6), radius).is_none());
+        assert!(walls
+            .signed_distance(DVec2::new(1.0, 0.6), radius)
+            .is_none());
     }
 
     /// An open-top 3-D box of triangles: behind outside the box, in front inside it, at
@@ -756,7 +773,8 @@ mod signed_distance_tests {
                     let inside = x.cmpgt(DVec3::ZERO).all() && x.cmplt(DVec3::ONE).all();
                     let q = x.clamp(DVec3::ZERO, DVec3::ONE);
                     let exact = if inside {
-                        x.min_element().min((DVec3::ONE - x).truncate().min_element())
+                        x.min_element()
+                            .min((DVec3::ONE - x).truncate().min_element())
                     } else {
                         (x - q).length()
                     };
