@@ -16,6 +16,7 @@
 
 use crate::case::DiagnosticsSection;
 use crate::checkpoint::SimState;
+use bisph_core::walls::Motion;
 use bisph_core::{SimError, Simulation, Vector};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -341,7 +342,9 @@ impl Watch {
     /// - the particle now lies behind the wall surface: its signed distance to the nearest
     ///   element within the kernel support, with pseudonormals at corners and edges, is
     ///   positive ([`bisph_core::walls::Walls::signed_distance`]). This catches crossings
-    ///   built up over many steps, each too small for the path test.
+    ///   built up over many steps, each too small for the path test. Particles within the
+    ///   kernel support of a moving body's walls are left to the path test (a moving wall
+    ///   may end a step a little past a particle it sweeps over).
     ///
     /// The depth reported is the larger of the two.
     fn wall_crossing<V: Vector>(
@@ -365,6 +368,7 @@ impl Watch {
         let support = sim.config.kernel.support;
         let tolerance = 0.01 * sim.config.kernel.h;
         let index = &self.previous_index;
+        let moving = sim.walls.has_moving_bodies();
         let bad = violators(sim, |i| {
             let p1 = f.position[i];
             // The position before the step (the particle itself when it has none).
@@ -391,6 +395,23 @@ impl Watch {
                 });
             // Gradual crossings: the particle lies behind the wall surface now, whatever its
             // path (the signed distance to the nearest element, with pseudonormals at corners).
+            // Near a moving body's walls only the path test applies: a moving wall may end a
+            // step a little past a particle it sweeps over (the wall term pushes it back).
+            let mut near_moving = false;
+            if moving {
+                sim.walls.grid.for_each_neighbour(
+                    p1,
+                    &e.centre,
+                    support + e.max_reach,
+                    |j, _, _| {
+                        near_moving |=
+                            !matches!(sim.walls.bodies[e.body[j] as usize].motion, Motion::Fixed);
+                    },
+                );
+            }
+            if near_moving {
+                return depth.filter(|&d| d > tolerance).map(|d| (d, d));
+            }
             if let Some(behind) = sim.walls.signed_distance(p1, support) {
                 if behind > 0.0 {
                     depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
