@@ -429,7 +429,7 @@ impl<V: Vector> Walls<V> {
             .for_each_candidate_within_shifted(x, search, |j, shift| {
                 if let Some((dj2, qj, w)) = nearest_on_element(e.current_corners(j), shift, x) {
                     if (dj2.sqrt() - d).abs() <= eps && (qj - q).length() <= eps {
-                        n = n + e.normal[j] * w;
+                        n += e.normal[j] * w;
                         count += 1;
                         interior |= w >= 2.0 * std::f64::consts::PI;
                     }
