@@ -475,6 +475,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                     }
                 },
                 geometric_gamma: case.usaw.gamma == crate::case::UsawGammaName::Geometric,
+                no_wall_tension: !case.usaw.wall_tension,
             }),
         },
         diffusion: match case.fluid.diffusion {

@@ -105,7 +105,7 @@ pub enum UsawGammaName {
 }
 
 /// `[usaw]`: options of the semi-analytical walls.
-#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct UsawSection {
     /// Vertex pressure extrapolation.
@@ -120,6 +120,22 @@ pub struct UsawSection {
     /// `"differential"` (eq 12, default) or `"summation"` (eqs 13 and 84).
     #[serde(default)]
     pub continuity: ContinuityName,
+    /// `true` (default): the wall terms carry negative pressures (walls pull in tension, as
+    /// in paper 3); `false`: walls push but never pull (`max(p, 0)` in the wall terms).
+    #[serde(default = "yes")]
+    pub wall_tension: bool,
+}
+
+impl Default for UsawSection {
+    fn default() -> Self {
+        UsawSection {
+            wall_interpolation: WallInterpolationName::default(),
+            gamma: UsawGammaName::default(),
+            density_power: 0,
+            continuity: ContinuityName::default(),
+            wall_tension: true,
+        }
+    }
 }
 
 /// Continuity equation of the semi-analytical walls (`usaw.continuity`).

@@ -7,7 +7,8 @@
 //! - the particle speed against `speed_over_c0 * c0` (weak compressibility needs `|u| << c0`);
 //! - the time step against `dt_collapse * dt0` (`dt0`: the first step's size);
 //! - wall crossings: a particle whose path in the step went from the fluid side of a wall
-//!   element's plane to its far side through the element itself;
+//!   element's plane to its far side through the element itself, or which lies behind the
+//!   wall surface (signed distance to the nearest element, however it got there);
 //! - energy growth: `(E_total - E_total(0)) / E_scale > energy_growth`, at every series row.
 //!
 //! Particles are named by their original index (`id`), stable across reorderings. When several
@@ -15,6 +16,7 @@
 
 use crate::case::DiagnosticsSection;
 use crate::checkpoint::SimState;
+use bisph_core::walls::Motion;
 use bisph_core::{SimError, Simulation, Vector};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -332,10 +334,19 @@ impl Watch {
         None
     }
 
-    /// Particles whose straight path over the step crossed an element from its fluid side
-    /// (`(r - c_j) . n_j <= 0`, normals point out of the fluid) to its far side, through the
-    /// element's own extent, and ended more than `h / 100` behind it (a moving wall may sweep
-    /// over a particle by a hair within a step; the wall term pushes it back the next one).
+    /// Particles more than `h / 100` behind a wall (a moving wall may sweep over a particle
+    /// by a hair within a step; the wall term pushes it back the next one), by two tests:
+    /// - the straight path over the step crossed an element from its fluid side
+    ///   (`(r - c_j) . n_j <= 0`, normals point out of the fluid) to its far side, through the
+    ///   element's own extent (a fast particle through a thin wall);
+    /// - the particle now lies behind the wall surface: its signed distance to the nearest
+    ///   element within the kernel support, with pseudonormals at corners and edges, is
+    ///   positive ([`bisph_core::walls::Walls::signed_distance`]). This catches crossings
+    ///   built up over many steps, each too small for the path test. Particles within the
+    ///   kernel support of a moving body's walls are left to the path test (a moving wall
+    ///   may end a step a little past a particle it sweeps over).
+    ///
+    /// The depth reported is the larger of the two.
     fn wall_crossing<V: Vector>(
         &mut self,
         sim: &Simulation<V>,
@@ -343,24 +354,29 @@ impl Watch {
     ) -> Option<Diagnosis> {
         let f = &sim.fluid;
         let n = f.len();
-        if previous.fluid.id.len() != n {
-            return None;
-        }
         self.previous_index.clear();
         self.previous_index.resize(n, u32::MAX);
-        for (k, &id) in previous.fluid.id.iter().enumerate() {
-            if let Some(slot) = self.previous_index.get_mut(id as usize) {
-                *slot = k as u32;
+        // The path test needs the same particles before and after the step.
+        if previous.fluid.id.len() == n {
+            for (k, &id) in previous.fluid.id.iter().enumerate() {
+                if let Some(slot) = self.previous_index.get_mut(id as usize) {
+                    *slot = k as u32;
+                }
             }
         }
         let e = &sim.walls.elements;
         let support = sim.config.kernel.support;
         let tolerance = 0.01 * sim.config.kernel.h;
         let index = &self.previous_index;
+        let moving = sim.walls.has_moving_bodies();
         let bad = violators(sim, |i| {
-            let k = *index.get(f.id[i] as usize)? as usize;
-            let p0 = *previous.fluid.position.get(k)?;
             let p1 = f.position[i];
+            // The position before the step (the particle itself when it has none).
+            let p0 = index
+                .get(f.id[i] as usize)
+                .and_then(|&k| previous.fluid.position.get(k as usize))
+                .copied()
+                .unwrap_or(p1);
             let radius = ((p1 - p0).length() + e.max_reach).min(support);
             let mut depth: Option<f64> = None;
             sim.walls
@@ -377,6 +393,30 @@ impl Watch {
                         depth = Some(depth.map_or(s1, |d: f64| d.max(s1)));
                     }
                 });
+            // Gradual crossings: the particle lies behind the wall surface now, whatever its
+            // path (the signed distance to the nearest element, with pseudonormals at corners).
+            // Near a moving body's walls only the path test applies: a moving wall may end a
+            // step a little past a particle it sweeps over (the wall term pushes it back).
+            let mut near_moving = false;
+            if moving {
+                sim.walls.grid.for_each_neighbour(
+                    p1,
+                    &e.centre,
+                    support + e.max_reach,
+                    |j, _, _| {
+                        near_moving |=
+                            !matches!(sim.walls.bodies[e.body[j] as usize].motion, Motion::Fixed);
+                    },
+                );
+            }
+            if near_moving {
+                return depth.filter(|&d| d > tolerance).map(|d| (d, d));
+            }
+            if let Some(behind) = sim.walls.signed_distance(p1, support) {
+                if behind > 0.0 {
+                    depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
+                }
+            }
             depth.filter(|&d| d > tolerance).map(|d| (d, d))
         });
         if bad.is_empty() {
@@ -517,4 +557,45 @@ pub fn energy_growth<V: Vector>(
         return Some(d);
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::build::build_simulation;
+    use crate::case::parse_case;
+    use glam::DVec2;
+
+    /// A particle that creeps behind a wall by steps far below the path test's depth
+    /// trips the watch once it lies more than h/100 behind; at rest in front it does not.
+    #[test]
+    fn gradual_crossing_trips_the_watch() {
+        let text = include_str!("../../../cases/dam-break-2d.toml");
+        let loaded = parse_case("<dam-break-2d>", text, &["resolution.dx=0.02".into()]).unwrap();
+        let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
+        let mut watch = Watch::new(loaded.case.diagnostics.clone());
+        let mut previous = SimState::default();
+        previous.capture(&sim);
+        assert!(watch.check(&sim, &previous, 0.0).is_none());
+        let h = sim.config.kernel.h;
+        // The particle nearest the left wall, moved behind it: 0.05 h last step, 0.02 h now.
+        let i = (0..sim.fluid.len())
+            .min_by(|&a, &b| {
+                let (pa, pb) = (sim.fluid.position[a], sim.fluid.position[b]);
+                (pa.x, pa.y).partial_cmp(&(pb.x, pb.y)).unwrap()
+            })
+            .unwrap();
+        let y = sim.fluid.position[i].y;
+        sim.fluid.position[i] = DVec2::new(-0.05 * h, y);
+        previous.capture(&sim);
+        sim.fluid.position[i] = DVec2::new(-0.052 * h, y);
+        let d = watch.check(&sim, &previous, 0.0).expect("the watch trips");
+        assert_eq!(d.kind, TripKind::WallCrossing);
+        assert!((d.value - 0.052 * h).abs() < 1e-12, "{}", d.value);
+        assert_eq!(d.particles[0].id, sim.fluid.id[i]);
+        // Behind by less than h/100: no trip.
+        sim.fluid.position[i] = DVec2::new(-0.009 * h, y);
+        previous.capture(&sim);
+        assert!(watch.check(&sim, &previous, 0.0).is_none());
+    }
 }

@@ -71,6 +71,9 @@ pub struct UsawParams {
     pub interpolation: WallInterpolation,
     /// Recompute gamma geometrically (paper 2) every step instead of integrating eq 4.
     pub geometric_gamma: bool,
+    /// Walls push but never pull: the wall terms use the non-negative parts of the particle,
+    /// vertex and segment pressures ([`crate::walls::usaw::UsawWalls::no_tension`]).
+    pub no_wall_tension: bool,
 }
 
 /// Which density diffusion the continuity equation carries (off when its coefficient is 0).
@@ -641,6 +644,7 @@ impl<V: Vector> Simulation<V> {
                 let usaw = UsawWalls {
                     vertices,
                     density_power: model.density_power,
+                    no_tension: params.no_wall_tension,
                 };
                 usaw.update_wall_pressure(&model.kernel, elements, &state, grid);
                 let wall_seconds = wall_start.elapsed().as_secs_f64();
@@ -722,11 +726,12 @@ impl<V: Vector> Simulation<V> {
                         &walls.grid,
                         i,
                     ),
-                    WallModelChoice::Usaw(_) => particle_operators(
+                    WallModelChoice::Usaw(params) => particle_operators(
                         &model,
                         &UsawWalls {
                             vertices: &walls.vertices,
                             density_power: model.density_power,
+                            no_tension: params.no_wall_tension,
                         },
                         &state,
                         grid,

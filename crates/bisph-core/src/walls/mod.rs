@@ -418,6 +418,52 @@ impl<V: Vector> Walls<V> {
         loads
     }
 
+    /// Signed distance from `x` to the wall surface, positive behind it (on the side the
+    /// normals point to, out of the fluid), from the nearest point `q` on the elements that
+    /// come within `radius` of `x`; `None` when none does. The side is that of the
+    /// angle-weighted pseudonormal at `q` (Baerentzen & Aanaes 2005): the element's normal on
+    /// its interior, the sum of the normals of the elements meeting at `q` on an edge (weight
+    /// pi each) or a corner (weight: each element's interior angle there), which gives the
+    /// exact side for closed polygons and closed meshes, convex and concave corners alike.
+    /// Points whose nearest feature is the free end of an open polyline (the free edge or
+    /// corner of a single 3-D element) count as in front (negative): nothing bounds the fluid
+    /// there. Back-to-back elements (a thin plate seen from both sides) cancel and count as in
+    /// front too. Exact ties are resolved by element order, so the result is deterministic.
+    pub fn signed_distance(&self, x: V, radius: f64) -> Option<f64> {
+        let e = &self.elements;
+        let search = radius + e.max_reach;
+        // First pass: the nearest point.
+        let mut best: Option<(f64, V)> = None;
+        self.grid
+            .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if let Some((d2, q, _)) = nearest_on_element(e.current_corners(j), shift, x) {
+                    if d2 < radius * radius && best.is_none_or(|(b, _)| d2 < b) {
+                        best = Some((d2, q));
+                    }
+                }
+            });
+        let (d2, q) = best?;
+        let d = d2.sqrt();
+        // Second pass: the pseudonormal of the elements sharing that nearest point.
+        let eps = 1e-9 * radius;
+        let (mut n, mut count, mut interior) = (V::ZERO, 0usize, false);
+        self.grid
+            .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if let Some((dj2, qj, w)) = nearest_on_element(e.current_corners(j), shift, x) {
+                    if (dj2.sqrt() - d).abs() <= eps && (qj - q).length() <= eps {
+                        n += e.normal[j] * w;
+                        count += 1;
+                        interior |= w >= 2.0 * std::f64::consts::PI;
+                    }
+                }
+            });
+        let side = (x - q).dot(n);
+        if count == 1 && !interior || side <= 0.0 {
+            return Some(-d);
+        }
+        Some(d)
+    }
+
     /// Number of points (fluid particles) that lie behind the walls: their nearest element
     /// within `radius` (by distance to the element's plane patch, approximated by the centre
     /// distance) has them on its wall side, `(x - c_j) . n_j > 0`. A diagnostic of particles
@@ -547,4 +593,219 @@ pub trait WallModel<V: Vector>: Sync {
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V>;
+}
+
+/// Nearest point to `x` on the element with these corners (moved by `shift`): its squared
+/// distance, the point, and the angle the element subtends there (2 pi on its interior, pi on a
+/// 3-D edge or at a 2-D end point, the interior angle at a 3-D corner). `None` for elements
+/// without extent. 3-D elements are planar convex polygons.
+fn nearest_on_element<V: Vector>(corners: &[V], shift: V, x: V) -> Option<(f64, V, f64)> {
+    use std::f64::consts::PI;
+    let m = corners.len();
+    if m < 2 {
+        return None;
+    }
+    let c = |k: usize| corners[k % m] + shift;
+    if m == 2 {
+        let (a, b) = (c(0), c(1));
+        let ab = b - a;
+        let l2 = ab.length_squared();
+        if l2 <= 0.0 {
+            return None;
+        }
+        let t = (x - a).dot(ab) / l2;
+        let (q, w) = if t <= 0.0 {
+            (a, PI)
+        } else if t >= 1.0 {
+            (b, PI)
+        } else {
+            (a + ab * t, 2.0 * PI)
+        };
+        return Some(((x - q).length_squared(), q, w));
+    }
+    // 3-D polygon: the projection onto its plane when it falls inside, else the nearest point
+    // of its edges.
+    let (p0, p1, p2) = (c(0).to_xyz(), c(1).to_xyz(), c(2).to_xyz());
+    let u = DVec3::from(p1) - DVec3::from(p0);
+    let v = DVec3::from(p2) - DVec3::from(p0);
+    let normal = u.cross(v).normalize_or_zero();
+    if normal == DVec3::ZERO {
+        return None;
+    }
+    let xv = DVec3::from(x.to_xyz());
+    let proj = xv - normal * (xv - DVec3::from(p0)).dot(normal);
+    let mut inside = true;
+    let mut sign = 0.0;
+    for k in 0..m {
+        let a = DVec3::from(c(k).to_xyz());
+        let b = DVec3::from(c(k + 1).to_xyz());
+        let s = (b - a).cross(proj - a).dot(normal);
+        if s != 0.0 {
+            if sign != 0.0 && s.signum() != sign {
+                inside = false;
+                break;
+            }
+            sign = s.signum();
+        }
+    }
+    if inside {
+        return Some((
+            (xv - proj).length_squared(),
+            V::from_slice(&proj.to_array()),
+            2.0 * PI,
+        ));
+    }
+    let mut best = (f64::INFINITY, DVec3::ZERO, 0.0);
+    for k in 0..m {
+        let a = DVec3::from(c(k).to_xyz());
+        let b = DVec3::from(c(k + 1).to_xyz());
+        let ab = b - a;
+        let t = ((xv - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+        let q = a + ab * t;
+        let d2 = (xv - q).length_squared();
+        if d2 < best.0 {
+            let w = if t > 0.0 && t < 1.0 {
+                PI
+            } else {
+                // The interior angle at the corner reached.
+                let k0 = if t <= 0.0 { k } else { k + 1 };
+                let here = DVec3::from(c(k0).to_xyz());
+                let prev = DVec3::from(c(k0 + m - 1).to_xyz()) - here;
+                let next = DVec3::from(c(k0 + 1).to_xyz()) - here;
+                prev.angle_between(next)
+            };
+            best = (d2, q, w);
+        }
+    }
+    Some((best.0, V::from_slice(&best.1.to_array()[..V::DIM]), best.2))
+}
+
+#[cfg(test)]
+mod signed_distance_tests {
+    use super::*;
+    use crate::geometry::{box_elements_3d, polyline_elements, triangulate, winding_number};
+    use glam::DVec2;
+
+    fn walls_2d(lines: &[(&[DVec2], bool)], dx: f64) -> Walls<DVec2> {
+        let mut e = BoundaryElements::default();
+        for (points, closed) in lines {
+            for s in polyline_elements(points, *closed, dx) {
+                e.push(s.centre, s.normal, s.area, 0, &s.corners);
+            }
+        }
+        Walls::new(e, vec![Body::fixed("walls")], 0.1)
+    }
+
+    /// A tank with a 90-degree wedge on its floor (convex and concave corners): the sign
+    /// agrees with the winding number and the magnitude with the distance to the polygon.
+    #[test]
+    fn signed_distance_matches_the_polygon_2d() {
+        let s = 0.5f64.sqrt() * 0.25;
+        let tank = [
+            DVec2::new(0.0, 1.0),
+            DVec2::new(0.0, 0.0),
+            DVec2::new(0.85, 0.0),
+            DVec2::new(0.85 + s, s),
+            DVec2::new(0.85 + 2.0 * s, 0.0),
+            DVec2::new(2.2, 0.0),
+            DVec2::new(2.2, 1.0),
+        ];
+        // The tank as three polylines, as a case lists them (elements of varying length).
+        let walls = walls_2d(
+            &[
+                (&tank[..3], false),
+                (&tank[2..4], false),
+                (&tank[3..], false),
+            ],
+            0.037,
+        );
+        let closed: Vec<DVec2> = tank.iter().copied().chain([DVec2::new(0.0, 1.0)]).collect();
+        let radius = 0.1;
+        let (mut behind, mut front) = (0, 0);
+        for i in 0..223 {
+            for k in 0..113 {
+                let x = DVec2::new(-0.05 + 0.01003 * i as f64, -0.05 + 0.00997 * k as f64);
+                if x.y > 0.95 {
+                    continue; // near the open top (free ends)
+                }
+                let Some(d) = walls.signed_distance(x, radius) else {
+                    continue;
+                };
+                let inside = winding_number(x, &closed[..closed.len() - 1]) != 0;
+                let exact = (0..tank.len() - 1)
+                    .map(|m| {
+                        let (a, b) = (tank[m], tank[m + 1]);
+                        let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                        (x - a - (b - a) * t).length()
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!((d.abs() - exact).abs() < 1e-12, "{x}: {d} vs {exact}");
+                if exact > 1e-12 {
+                    assert_eq!(d > 0.0, !inside, "{x}: {d}");
+                }
+                if d > 0.0 {
+                    behind += 1;
+                } else {
+                    front += 1;
+                }
+            }
+        }
+        assert!(behind > 1000 && front > 1000, "{behind} {front}");
+        // Beyond the free top end of the left wall: in front.
+        assert!(
+            walls
+                .signed_distance(DVec2::new(-0.02, 1.03), radius)
+                .unwrap()
+                < 0.0
+        );
+        // Far from every wall: none.
+        assert!(walls
+            .signed_distance(DVec2::new(1.0, 0.6), radius)
+            .is_none());
+    }
+
+    /// An open-top 3-D box of triangles: behind outside the box, in front inside it, at
+    /// faces, edges and corners.
+    #[test]
+    fn signed_distance_matches_the_box_3d() {
+        let mut e = BoundaryElements::default();
+        let shapes = triangulate(box_elements_3d(
+            DVec3::ZERO,
+            DVec3::ONE,
+            &["+z".to_string()],
+            0.23,
+        ));
+        for s in shapes {
+            e.push(s.centre, s.normal, s.area, 0, &s.corners);
+        }
+        let walls = Walls::new(e, vec![Body::fixed("walls")], 0.1);
+        let radius = 0.1;
+        let mut n = 0;
+        for i in 0..31 {
+            for j in 0..31 {
+                for k in 0..25 {
+                    let x = DVec3::new(
+                        -0.08 + 0.0387 * i as f64,
+                        -0.08 + 0.0391 * j as f64,
+                        -0.08 + 0.0383 * k as f64,
+                    );
+                    let Some(d) = walls.signed_distance(x, radius) else {
+                        continue;
+                    };
+                    let inside = x.cmpgt(DVec3::ZERO).all() && x.cmplt(DVec3::ONE).all();
+                    let q = x.clamp(DVec3::ZERO, DVec3::ONE);
+                    let exact = if inside {
+                        x.min_element()
+                            .min((DVec3::ONE - x).truncate().min_element())
+                    } else {
+                        (x - q).length()
+                    };
+                    assert!((d.abs() - exact).abs() < 1e-12, "{x}: {d} vs {exact}");
+                    assert_eq!(d > 0.0, !inside, "{x}: {d}");
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > 5000, "{n}");
+    }
 }

@@ -322,6 +322,14 @@ pub struct UsawWalls<'a, V: Vector> {
     pub vertices: &'a Vertices<V>,
     /// The power `k` of eqs 37-38 (0 or 1).
     pub density_power: u8,
+    /// Walls push but never pull: the vertex pairs and the segments take `max(p, 0)` of the
+    /// particle's, the vertices' and the segments' pressures. In tension (`p < 0`, behind a
+    /// convex corner where the flow separates) the discrete vertex and segment sums no longer
+    /// balance the fluid sum exactly, and the imbalance times a negative pressure draws
+    /// particles into the wall; without the wall's part the fluid's tension pulls them back
+    /// into the fluid instead. Not in paper 3 (which has no separating flow over a corner at
+    /// low resolution); off by default.
+    pub no_tension: bool,
 }
 
 impl<V: Vector> UsawWalls<'_, V> {
@@ -388,13 +396,15 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         let mut velocity_divergence = 0.0;
         // Vertex particles in the volume sums (eqs 37-38 over P = V u F).
         let v = self.vertices;
+        let wall_p = |p: f64| if self.no_tension { p.max(0.0) } else { p };
+        let p_a = wall_p(a.p);
         v.grid
             .for_each_neighbour(a.x, &v.position, kernel.support, |b, r_ab, r| {
                 let grad_w = r_ab * kernel.gradient_factor(r);
                 let ratio = self.ratio(a.rho, v.density[b]);
                 pressure_gradient += crate::terms::pressure_gradient::pair_k(
-                    a.p,
-                    v.pressure[b],
+                    p_a,
+                    wall_p(v.pressure[b]),
                     grad_w,
                     v.volume[b],
                     ratio,
@@ -416,7 +426,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
             }
             let (p_s, rho_s) = self.segment_values(j);
             let ratio = self.ratio(a.rho, rho_s);
-            pressure_gradient -= gg * (ratio * p_s + a.p / ratio);
+            pressure_gradient -= gg * (ratio * wall_p(p_s) + p_a / ratio);
             velocity_divergence -= (elements.velocity[j] - a.u).dot(gg) / ratio;
         });
         WallTerms {
