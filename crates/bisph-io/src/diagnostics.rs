@@ -409,12 +409,11 @@ impl Watch {
                     },
                 );
             }
-            if near_moving {
-                return depth.filter(|&d| d > tolerance).map(|d| (d, d));
-            }
-            if let Some(behind) = sim.walls.signed_distance(p1, support) {
-                if behind > 0.0 {
-                    depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
+            if !near_moving && sim.walls.may_be_behind(p1, support) {
+                if let Some(behind) = sim.walls.signed_distance(p1, support) {
+                    if behind > 0.0 {
+                        depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
+                    }
                 }
             }
             depth.filter(|&d| d > tolerance).map(|d| (d, d))

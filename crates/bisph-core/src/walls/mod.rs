@@ -418,6 +418,21 @@ impl<V: Vector> Walls<V> {
         loads
     }
 
+    /// `false` when `x` is in front of the plane of every element that comes within `radius`
+    /// of it (to 1e-9 `radius`): then [`Walls::signed_distance`] is not positive, since being
+    /// behind the surface means being behind the plane of an element meeting at the nearest
+    /// point. One dot product per candidate: the cheap pre-test of the wall-crossing watch.
+    pub fn may_be_behind(&self, x: V, radius: f64) -> bool {
+        let e = &self.elements;
+        let slack = -1e-9 * radius;
+        let mut behind = false;
+        self.grid
+            .for_each_candidate_within_shifted(x, radius + e.max_reach, |j, shift| {
+                behind |= (x - e.centre[j] - shift).dot(e.normal[j]) > slack;
+            });
+        behind
+    }
+
     /// Signed distance from `x` to the wall surface, positive behind it (on the side the
     /// normals point to, out of the fluid), from the nearest point `q` on the elements that
     /// come within `radius` of `x`; `None` when none does. The side is that of the
