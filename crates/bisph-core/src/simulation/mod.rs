@@ -54,6 +54,12 @@ impl WallModelChoice {
         matches!(self, WallModelChoice::Usaw(_))
     }
 
+    /// `true` when the wall model itself evaluates the geometric Shepard factor (paper 2):
+    /// geometric renormalisation, or gamma of the semi-analytical or integrated walls.
+    pub fn evaluates_geometric_gamma(&self) -> bool {
+        matches!(self, WallModelChoice::ShepardBi(ShepardKind::Geometric)) || self.needs_gamma()
+    }
+
     /// `true` when gamma is integrated in time (else recomputed geometrically every step).
     fn integrates_gamma(&self) -> bool {
         match self {
@@ -405,10 +411,7 @@ impl<V: Vector> Simulation<V> {
     /// geometric renormalisation, gamma of the semi-analytical or integrated walls, or the
     /// viscous Laplacian of the other models (paper 3, eq 18).
     fn uses_geometric_gamma(&self) -> bool {
-        let model = self.config.wall_model;
-        matches!(model, WallModelChoice::ShepardBi(ShepardKind::Geometric))
-            || model.needs_gamma()
-            || self.config.viscosity.active()
+        self.config.wall_model.evaluates_geometric_gamma() || self.config.viscosity.active()
     }
 
     /// `true` when the densities come from summation (paper 3, eq 84).
