@@ -340,10 +340,11 @@ impl Watch {
     ///   (`(r - c_j) . n_j <= 0`, normals point out of the fluid) to its far side, through the
     ///   element's own extent (a fast particle through a thin wall);
     /// - the particle now lies behind the wall surface: its signed distance to the nearest
-    ///   element within the kernel support, with pseudonormals at corners and edges, is
-    ///   positive ([`bisph_core::walls::Walls::signed_distance`]). This catches crossings
-    ///   built up over many steps, each too small for the path test. Particles within the
-    ///   kernel support of a moving body's walls are left to the path test (a moving wall
+    ///   element within the kernel support less the largest element reach (at least half the
+    ///   support), with pseudonormals at corners and edges, is positive
+    ///   ([`bisph_core::walls::Walls::signed_distance`]). This catches crossings built up over
+    ///   many steps, each too small for the path test. Particles within that distance of a
+    ///   moving body's walls are left to the path test (a moving wall
     ///   may end a step a little past a particle it sweeps over).
     ///
     /// The depth reported is the larger of the two.
@@ -367,6 +368,10 @@ impl Watch {
         let e = &sim.walls.elements;
         let support = sim.config.kernel.support;
         let tolerance = 0.01 * sim.config.kernel.h;
+        // The gradual-crossing search reaches one wall-grid cell (the kernel support) with the
+        // element reach included: a particle drifting behind a wall is caught while shallow,
+        // so a deeper search would only visit five times the cells in 3-D.
+        let behind_search = (support - e.max_reach).max(0.5 * support);
         let index = &self.previous_index;
         let moving = sim.walls.has_moving_bodies();
         let bad = violators(sim, |i| {
@@ -402,15 +407,15 @@ impl Watch {
                 sim.walls.grid.for_each_neighbour(
                     p1,
                     &e.centre,
-                    support + e.max_reach,
+                    behind_search + e.max_reach,
                     |j, _, _| {
                         near_moving |=
                             !matches!(sim.walls.bodies[e.body[j] as usize].motion, Motion::Fixed);
                     },
                 );
             }
-            if !near_moving && sim.walls.may_be_behind(p1, support) {
-                if let Some(behind) = sim.walls.signed_distance(p1, support) {
+            if !near_moving && sim.walls.may_be_behind(p1, behind_search) {
+                if let Some(behind) = sim.walls.signed_distance(p1, behind_search) {
                     if behind > 0.0 {
                         depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
                     }

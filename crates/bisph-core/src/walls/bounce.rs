@@ -57,11 +57,13 @@ pub fn elastic_bounce<V: Vector>(
             if normal_distance < 0.0 {
                 return; // behind this element's plane
             }
-            if (r - n * normal_distance).length() > elements.reach[j] * (1.0 + 1e-6) {
-                return; // beside the element
-            }
             let approach = (*d - elements.velocity[j]).dot(n);
-            if approach > 0.0 && normal_distance <= dt * approach {
+            if approach <= 0.0 || normal_distance > dt * approach {
+                return; // not reaching the plane in this step
+            }
+            if (r - n * normal_distance).length_squared()
+                <= (elements.reach[j] * (1.0 + 1e-6)).powi(2)
+            {
                 reflect(d, j);
                 if let Some(e) = e.as_deref_mut() {
                     reflect(e, j);

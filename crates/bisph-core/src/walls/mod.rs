@@ -447,10 +447,24 @@ impl<V: Vector> Walls<V> {
     pub fn signed_distance(&self, x: V, radius: f64) -> Option<f64> {
         let e = &self.elements;
         let search = radius + e.max_reach;
+        // An element whose centre is farther than `bound` plus its reach holds no point within
+        // `bound`; the nearest centre bounds the distance to the surface from above.
+        let mut nearest_centre = f64::INFINITY;
+        self.grid
+            .for_each_candidate_within_shifted(x, search, |j, shift| {
+                nearest_centre = nearest_centre.min((x - e.centre[j] - shift).length_squared());
+            });
+        let beyond = |j: usize, shift: V, bound: f64| {
+            (x - e.centre[j] - shift).length_squared() > (bound + e.reach[j]).powi(2)
+        };
+        let bound = nearest_centre.sqrt().min(radius);
         // First pass: the nearest point.
         let mut best: Option<(f64, V)> = None;
         self.grid
             .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if beyond(j, shift, bound) {
+                    return;
+                }
                 if let Some((d2, q, _)) = nearest_on_element(e.current_corners(j), shift, x) {
                     if d2 < radius * radius && best.is_none_or(|(b, _)| d2 < b) {
                         best = Some((d2, q));
@@ -464,6 +478,9 @@ impl<V: Vector> Walls<V> {
         let (mut n, mut count, mut interior) = (V::ZERO, 0usize, false);
         self.grid
             .for_each_candidate_within_shifted(x, search, |j, shift| {
+                if beyond(j, shift, d + eps) {
+                    return;
+                }
                 if let Some((dj2, qj, w)) = nearest_on_element(e.current_corners(j), shift, x) {
                     if (dj2.sqrt() - d).abs() <= eps && (qj - q).length() <= eps {
                         n += e.normal[j] * w;
