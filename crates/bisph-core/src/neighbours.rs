@@ -5,6 +5,14 @@
 //! allocation once the buffers have grown; cell indices are computed in parallel); for the fluid the sort order is also used to
 //! reorder the particles themselves, so a cell's particles are contiguous in memory.
 //!
+//! **Storage order.** Points are sorted by *row* of cells (the cells sharing `y` and `z`),
+//! rows in the order of a Morton (Z-order) curve over `(y, z)` (plain row order in 2-D), and
+//! by cell along `x` within a row. A run of consecutive cells along `x` is then one contiguous
+//! range of sorted slots, so the `3^d` cells around a point are `3^(d-1)` ranges. Once the
+//! particles have been reordered into this order ([`CellGrid::mark_reordered`]), slot and
+//! point index coincide and a neighbour query streams through contiguous slices of the
+//! position array.
+//!
 //! **Periodic axes.** Along an axis of a [`Periodicity`] the grid spans exactly one period
 //! `[min, min + L)` with `floor(L / cell)` cells (so cells are at least `cell` wide), and the
 //! cells around a point wrap around. Every visited point comes with the shift (a multiple of
@@ -90,9 +98,18 @@ pub struct CellGrid<V: Vector> {
     dims: [usize; 3],
     period: Periodicity<V>,
     periodic: bool,
+    /// Start slot of each cell, indexed by the cell's rank in the storage order (plus one
+    /// end entry).
     cell_start: Vec<u32>,
+    /// Point index of each slot.
     items: Vec<u32>,
     cell_of: Vec<u32>,
+    /// Rank of the first cell of each row (`cy + ny cz`) in the storage order.
+    row_rank: Vec<u32>,
+    /// The grid dimensions `row_rank` was made for.
+    row_dims: [usize; 3],
+    /// `true` when `items[k] = k` (the points were reordered into the storage order).
+    contiguous: bool,
 }
 
 impl<V: Vector> CellGrid<V> {
@@ -109,6 +126,9 @@ impl<V: Vector> CellGrid<V> {
             cell_start: vec![0, 0],
             items: Vec::new(),
             cell_of: Vec::new(),
+            row_rank: vec![0],
+            row_dims: [1; 3],
+            contiguous: false,
         }
     }
 
@@ -145,41 +165,45 @@ impl<V: Vector> CellGrid<V> {
         self.cell
     }
 
-    /// Point indices sorted by cell, row by row (cells in index order).
+    /// Point indices in the storage order (by row of cells, rows along a Morton curve over
+    /// `(y, z)`, cells along `x` within a row, each cell's points in increasing index): the
+    /// permutation that reorders particles so that runs of cells are contiguous in memory.
     pub fn sorted_items(&self) -> &[u32] {
         &self.items
     }
 
-    /// Writes into `order` the point indices with their cells along a Morton (Z-order)
-    /// curve, each cell's points in increasing index: the permutation used to reorder
-    /// particles, so that the cells around any cell lie close in memory along every axis
-    /// (rows only are close in [`CellGrid::sorted_items`]). `cells` is a reusable buffer.
-    pub fn morton_order(&self, order: &mut Vec<u32>, cells: &mut Vec<(u64, u32)>) {
+    /// Declares that the points were permuted by [`CellGrid::sorted_items`] (new point `k` is
+    /// old point `sorted_items()[k]`): the cells keep their slots and each slot now holds the
+    /// point of the same index, so no rebuild is needed and queries read contiguous slices.
+    pub fn mark_reordered(&mut self) {
+        for (k, item) in self.items.iter_mut().enumerate() {
+            *item = k as u32;
+        }
+        self.contiguous = true;
+    }
+
+    /// Ranks of the rows in the storage order, for the current dimensions.
+    fn rank_rows(&mut self) {
         let [nx, ny, nz] = self.dims;
-        cells.clear();
-        for cz in 0..nz {
-            for cy in 0..ny {
-                for cx in 0..nx {
-                    let c = cx + nx * (cy + ny * cz);
-                    if self.cell_start[c] != self.cell_start[c + 1] {
-                        cells.push((morton_key([cx, cy, cz], V::DIM), c as u32));
-                    }
-                }
-            }
+        if self.row_dims == self.dims && self.row_rank.len() == ny * nz {
+            return;
         }
-        cells.sort_unstable();
-        order.clear();
-        for &(_, c) in cells.iter() {
-            let c = c as usize;
-            order.extend_from_slice(
-                &self.items[self.cell_start[c] as usize..self.cell_start[c + 1] as usize],
-            );
+        let mut rows: Vec<(u64, u32)> = (0..ny * nz)
+            .map(|row| (morton_key([row % ny, row / ny, 0], 2), row as u32))
+            .collect();
+        rows.sort_unstable();
+        self.row_rank.clear();
+        self.row_rank.resize(ny * nz, 0);
+        for (k, &(_, row)) in rows.iter().enumerate() {
+            self.row_rank[row as usize] = (k * nx) as u32;
         }
+        self.row_dims = self.dims;
     }
 
     /// Rebuilds the grid for `points` (all of which must be finite).
     pub fn rebuild(&mut self, points: &[V]) {
         let n = points.len();
+        self.contiguous = false;
         if n == 0 {
             self.dims = [1; 3];
             self.cell_start.clear();
@@ -203,6 +227,7 @@ impl<V: Vector> CellGrid<V> {
         }
         self.origin = lo;
         self.dims = dims;
+        self.rank_rows();
         let cells = dims[0] * dims[1] * dims[2];
         let mut cell_of = std::mem::take(&mut self.cell_of);
         cell_of.resize(n, 0);
@@ -211,7 +236,7 @@ impl<V: Vector> CellGrid<V> {
             .par_iter_mut()
             .zip(points.par_iter())
             .with_min_len(4096)
-            .for_each(|(c, &p)| *c = this.cell_index(p) as u32);
+            .for_each(|(c, &p)| *c = this.cell_rank(p) as u32);
         self.cell_of = cell_of;
         self.cell_start.clear();
         self.cell_start.resize(cells + 1, 0);
@@ -223,7 +248,7 @@ impl<V: Vector> CellGrid<V> {
         }
         self.items.clear();
         self.items.resize(n, 0);
-        // Stable counting sort: fill each cell in increasing point order.
+        // Stable counting sort by rank: fill each cell in increasing point order.
         for (i, &c) in self.cell_of.iter().enumerate() {
             let slot = &mut self.cell_start[c as usize];
             self.items[*slot as usize] = i as u32;
@@ -238,7 +263,10 @@ impl<V: Vector> CellGrid<V> {
 
     /// Estimated heap memory of the grid in bytes.
     pub fn memory_bytes(&self) -> usize {
-        4 * (self.cell_start.capacity() + self.items.capacity() + self.cell_of.capacity())
+        4 * (self.cell_start.capacity()
+            + self.items.capacity()
+            + self.cell_of.capacity()
+            + self.row_rank.capacity())
     }
 
     #[inline(always)]
@@ -250,12 +278,23 @@ impl<V: Vector> CellGrid<V> {
         c
     }
 
+    /// Rank in the storage order of the cell of `p` (clamped to the grid).
     #[inline(always)]
-    fn cell_index(&self, p: V) -> usize {
+    fn cell_rank(&self, p: V) -> usize {
         let c = self.coords(p);
         let clamp = |v: i64, d: usize| v.clamp(0, d as i64 - 1) as usize;
-        clamp(c[0], self.dims[0])
-            + self.dims[0] * (clamp(c[1], self.dims[1]) + self.dims[1] * clamp(c[2], self.dims[2]))
+        let row = clamp(c[1], self.dims[1]) + self.dims[1] * clamp(c[2], self.dims[2]);
+        self.row_rank[row] as usize + clamp(c[0], self.dims[0])
+    }
+
+    /// Slots `start..end` of the cells `x0..=x1` of row `row` (`cy + ny cz`).
+    #[inline(always)]
+    fn run_slots(&self, row: usize, x0: usize, x1: usize) -> (usize, usize) {
+        let first = self.row_rank[row] as usize;
+        (
+            self.cell_start[first + x0] as usize,
+            self.cell_start[first + x1 + 1] as usize,
+        )
     }
 
     /// Calls `visit(j)` for every point `j` in the cells around `x` (a superset of the points
@@ -292,9 +331,7 @@ impl<V: Vector> CellGrid<V> {
         }
         for cz in lo[2]..=hi[2] {
             for cy in lo[1]..=hi[1] {
-                let row = self.dims[0] * (cy + self.dims[1] * cz);
-                let start = self.cell_start[row + lo[0]] as usize;
-                let end = self.cell_start[row + hi[0] + 1] as usize;
+                let (start, end) = self.run_slots(cy + self.dims[1] * cz, lo[0], hi[0]);
                 for &j in &self.items[start..end] {
                     visit(j as usize);
                 }
@@ -326,19 +363,19 @@ impl<V: Vector> CellGrid<V> {
     /// axes (each cell once, at the image nearest to `x`), with the shift of each cell's image.
     #[inline(always)]
     fn for_each_in_span_shifted(&self, x: V, span: i64, mut visit: impl FnMut(usize, V)) {
-        self.for_each_run(x, span, |run, shift| {
-            for &j in run {
+        self.for_each_run(x, span, |start, end, shift| {
+            for &j in &self.items[start..end] {
                 visit(j as usize, shift);
             }
         });
     }
 
-    /// Calls `visit(run, shift)` for each run of consecutive cells at most `span` cells from
-    /// the cell of `x` (a slice of point indices), wrapping around periodic axes (each cell
+    /// Calls `visit(start, end, shift)` for each run of consecutive cells at most `span` cells
+    /// from the cell of `x` (the slots `start..end` of [`CellGrid::sorted_items`]), wrapping around periodic axes (each cell
     /// once, at the image nearest to `x`; `shift` moves its points there, zero without
     /// periodic axes). One call site of `visit`, so callers' closures inline into it.
     #[inline(always)]
-    fn for_each_run(&self, x: V, span: i64, mut visit: impl FnMut(&[u32], V)) {
+    fn for_each_run(&self, x: V, span: i64, mut visit: impl FnMut(usize, usize, V)) {
         let c = self.coords(x);
         // Per axis: up to three runs of cell indices (lo, hi, shift along the axis).
         let mut runs = [[(0usize, 0usize, 0.0f64); 3]; 3];
@@ -384,12 +421,11 @@ impl<V: Vector> CellGrid<V> {
                 for &(y0, y1, sy) in &runs[1][..counts[1]] {
                     shift.set(1, sy);
                     for cy in y0..=y1 {
-                        let row = self.dims[0] * (cy + self.dims[1] * cz);
+                        let row = cy + self.dims[1] * cz;
                         for &(x0, x1, sx) in &runs[0][..counts[0]] {
                             shift.set(0, sx);
-                            let start = self.cell_start[row + x0] as usize;
-                            let end = self.cell_start[row + x1 + 1] as usize;
-                            visit(&self.items[start..end], shift);
+                            let (start, end) = self.run_slots(row, x0, x1);
+                            visit(start, end, shift);
                         }
                     }
                 }
@@ -398,7 +434,13 @@ impl<V: Vector> CellGrid<V> {
     }
 
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
-    /// periodic axes) for every point with `|r_ij| < radius`.
+    /// periodic axes) for every point with `|r_ij| < radius`, in storage order.
+    ///
+    /// The candidates of each run of cells are filtered in blocks without a branch per
+    /// candidate: every candidate's index and `r^2` are written to a small buffer whose fill
+    /// count grows by one only for points inside the radius, then `visit` runs over the kept
+    /// ones. With reordered points ([`CellGrid::mark_reordered`]) the candidates are read as a
+    /// contiguous slice of `points`.
     #[inline(always)]
     pub fn for_each_neighbour(
         &self,
@@ -407,17 +449,37 @@ impl<V: Vector> CellGrid<V> {
         radius: f64,
         mut visit: impl FnMut(usize, V, f64),
     ) {
+        const BLOCK: usize = 32;
         let r2max = radius * radius;
-        self.for_each_run(x, 1, |run, shift| {
+        let mut kept = [0u32; BLOCK];
+        let mut kept_r2 = [0.0f64; BLOCK];
+        self.for_each_run(x, 1, |start, end, shift| {
             // The image of `x` seen from the run's points (exactly `x` without periodicity).
             let origin = x - shift;
-            for &j in run {
-                let j = j as usize;
-                let r = points[j] - origin;
-                let r2 = r.length_squared();
-                if r2 < r2max {
-                    visit(j, r, r2.sqrt());
+            let mut s = start;
+            while s < end {
+                let e = end.min(s + BLOCK);
+                let mut n = 0usize;
+                if self.contiguous {
+                    for (j, &p) in (s..e).zip(&points[s..e]) {
+                        let r2 = (p - origin).length_squared();
+                        kept[n % BLOCK] = j as u32;
+                        kept_r2[n % BLOCK] = r2;
+                        n += usize::from(r2 < r2max);
+                    }
+                } else {
+                    for &j in &self.items[s..e] {
+                        let r2 = (points[j as usize] - origin).length_squared();
+                        kept[n % BLOCK] = j;
+                        kept_r2[n % BLOCK] = r2;
+                        n += usize::from(r2 < r2max);
+                    }
                 }
+                for (&j, &r2) in kept[..n].iter().zip(&kept_r2[..n]) {
+                    let j = j as usize;
+                    visit(j, points[j] - origin, r2.sqrt());
+                }
+                s = e;
             }
         });
     }
@@ -593,25 +655,92 @@ mod tests {
     }
 
     #[test]
-    fn morton_order_is_a_permutation_along_the_z_curve() {
+    fn storage_order_is_rows_along_the_z_curve_with_contiguous_runs() {
         assert_eq!(morton_key([1, 0, 0], 2), 1);
         assert_eq!(morton_key([0, 1, 0], 2), 2);
         assert_eq!(morton_key([3, 3, 0], 2), 15);
         assert_eq!(morton_key([0, 0, 1], 3), 4);
         assert_eq!(morton_key([1, 1, 1], 3), 7);
         assert_eq!(morton_key([2, 0, 0], 3), 8);
-        // Points at the centres of a 4 x 4 grid of unit cells, listed row by row.
+        // 2-D: plain row order.
         let pts: Vec<DVec2> = (0..16)
             .map(|k| DVec2::new((k % 4) as f64 + 0.5, (k / 4) as f64 + 0.5))
+            .rev()
             .collect();
         let mut grid = CellGrid::new(1.0);
         grid.rebuild(&pts);
-        let (mut order, mut cells) = (Vec::new(), Vec::new());
-        grid.morton_order(&mut order, &mut cells);
-        assert_eq!(
-            order,
-            [0, 1, 4, 5, 2, 3, 6, 7, 8, 9, 12, 13, 10, 11, 14, 15]
-        );
+        let expected: Vec<u32> = (0..16).rev().collect();
+        assert_eq!(grid.sorted_items(), &expected[..]);
+        // 3-D: 2 cells per row, rows (y, z) along the Z curve.
+        let cell = |cx: usize, cy: usize, cz: usize| cx + 2 * (cy + 4 * cz);
+        let pts: Vec<DVec3> = (0..32)
+            .map(|k| {
+                let (cx, cy, cz) = (k % 2, (k / 2) % 4, k / 8);
+                DVec3::new(cx as f64, cy as f64, cz as f64) + 0.5
+            })
+            .collect();
+        let mut grid = CellGrid::new(1.0);
+        grid.rebuild(&pts);
+        let rows = [
+            (0, 0),
+            (1, 0),
+            (0, 1),
+            (1, 1),
+            (2, 0),
+            (3, 0),
+            (2, 1),
+            (3, 1),
+        ];
+        let expected: Vec<u32> = rows
+            .iter()
+            .flat_map(|&(cy, cz)| [cell(0, cy, cz) as u32, cell(1, cy, cz) as u32])
+            .collect();
+        assert_eq!(&grid.sorted_items()[..16], &expected[..]);
+    }
+
+    fn check_reordered<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let mut grid = CellGrid::with_period(radius, period).unwrap();
+        grid.rebuild(&points);
+        let order = grid.sorted_items().to_vec();
+        let sorted: Vec<V> = order.iter().map(|&k| points[k as usize]).collect();
+        grid.mark_reordered();
+        let mut fresh = CellGrid::with_period(radius, period).unwrap();
+        fresh.rebuild(&sorted);
+        assert_eq!(fresh.sorted_items(), grid.sorted_items(), "already sorted");
+        for &x in sorted.iter().step_by(7) {
+            let mut found = Vec::new();
+            grid.for_each_neighbour(x, &sorted, radius, |j, r, d| found.push((j, r, d)));
+            let mut again = Vec::new();
+            fresh.for_each_neighbour(x, &sorted, radius, |j, r, d| again.push((j, r, d)));
+            assert_eq!(found, again);
+            let mut brute: Vec<usize> = (0..sorted.len())
+                .filter(|&j| period.minimum_image(sorted[j] - x).length_squared() < radius * radius)
+                .collect();
+            let mut ids: Vec<usize> = found.iter().map(|f| f.0).collect();
+            ids.sort();
+            brute.sort();
+            assert_eq!(ids, brute);
+        }
+    }
+
+    #[test]
+    fn reordered_points_are_queried_as_contiguous_runs() {
+        let r: Vec<f64> = pseudo_random(3000, 5).collect();
+        let p2: Vec<DVec2> = r
+            .chunks(2)
+            .map(|c| DVec2::new(c[0], 2.0 * c[1] - 0.5))
+            .collect();
+        check_reordered(p2.clone(), 0.07, Periodicity::none());
+        let period = Periodicity {
+            min: DVec2::new(0.0, -0.5),
+            length: DVec2::new(1.0, 2.0),
+        };
+        check_reordered(p2, 0.07, period);
+        let p3: Vec<DVec3> = r
+            .chunks(3)
+            .map(|c| DVec3::new(c[0], c[1], 0.3 * c[2]))
+            .collect();
+        check_reordered(p3, 0.15, Periodicity::none());
     }
 
     #[test]

@@ -151,7 +151,8 @@ pub struct SimConfig<V: Vector> {
     pub wall_model: WallModelChoice,
     /// Time integrator.
     pub integrator: Integrator,
-    /// Reorder particles along a Morton curve of cells every this many steps (0 = never).
+    /// Reorder particles into the cell grid's storage order (rows of cells along a Morton
+    /// curve) every this many steps (0 = never).
     pub reorder_interval: u64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
@@ -184,9 +185,6 @@ struct Scratch<V> {
     previous_density_rate: Vec<f64>,
     drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
-    /// The reordering permutation and its Morton-keyed cells.
-    order: Vec<u32>,
-    morton_cells: Vec<(u64, u32)>,
 }
 
 /// The state of a running simulation.
@@ -544,12 +542,11 @@ impl<V: Vector> Simulation<V> {
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
             let sorted = Instant::now();
-            let scratch = &mut self.scratch;
-            self.fluid_grid
-                .morton_order(&mut scratch.order, &mut scratch.morton_cells);
-            self.fluid.permute(&scratch.order, &mut scratch.permute);
+            // Into the grid's storage order: the grid stays valid, its slots now contiguous.
+            self.fluid
+                .permute(self.fluid_grid.sorted_items(), &mut self.scratch.permute);
+            self.fluid_grid.mark_reordered();
             self.timings.reorder += sorted.elapsed().as_secs_f64();
-            self.fluid_grid.rebuild(&self.fluid.position);
         }
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }

@@ -80,40 +80,28 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         fluid.density[i],
         fluid.pressure[i],
     );
-    let mut grad_p = V::ZERO;
-    let mut div_u = 0.0;
-    let mut diffusion = 0.0;
-    let mut shepard = 0.0;
-    let mut viscous = V::ZERO;
-    let diffuse = model.diffusion.scale != 0.0;
     let viscosity = model.viscosity;
     let viscid = viscosity.active();
     let discrete_shepard = W::RENORMALISE && wall_model.needs_discrete_shepard();
-    let weighted = model.density_power != 0;
-    fluid_grid.for_each_neighbour(x_i, fluid.position, kernel.support, |j, r_ij, r| {
-        let f = kernel.gradient_factor(r);
-        let grad_w = r_ij * f;
-        let volume_j = fluid.volume[j];
-        if weighted {
-            let ratio = rho_i / fluid.density[j];
-            grad_p += pressure_gradient::pair_k(p_i, fluid.pressure[j], grad_w, volume_j, ratio);
-            div_u += velocity_divergence::pair_k(u_i, fluid.velocity[j], grad_w, volume_j, ratio);
-        } else {
-            grad_p += pressure_gradient::pair(p_i, fluid.pressure[j], grad_w, volume_j);
-            div_u += velocity_divergence::pair(u_i, fluid.velocity[j], grad_w, volume_j);
-        }
-        if diffuse {
-            diffusion += model
-                .diffusion
-                .pair(rho_i, fluid.density[j], r_ij, r, f, volume_j);
-        }
-        if viscid {
-            viscous += viscosity.pair(u_i, fluid.velocity[j], rho_i, fluid.density[j], f, volume_j);
-        }
-        if discrete_shepard {
-            shepard += kernel.value(r) * volume_j;
-        }
-    });
+    let sums = fluid_sums_dispatch(
+        model,
+        fluid,
+        fluid_grid,
+        i,
+        [
+            model.density_power != 0,
+            model.diffusion.scale != 0.0,
+            viscid,
+            discrete_shepard,
+        ],
+    );
+    let FluidSums {
+        grad_p,
+        div_u,
+        diffusion,
+        viscous,
+        shepard,
+    } = sums;
     let view = ParticleView {
         x: x_i,
         u: u_i,
@@ -174,6 +162,104 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         viscous,
         wall_viscous,
     }
+}
+
+/// The fluid sums of one particle (before the wall model completes them).
+#[derive(Clone, Copy, Debug)]
+struct FluidSums<V> {
+    grad_p: V,
+    div_u: f64,
+    diffusion: f64,
+    viscous: V,
+    shepard: f64,
+}
+
+/// [`fluid_sums`] with its switches `[weighted, diffuse, viscid, shepard]` turned into
+/// constants, so that the pair loop of each combination carries no test of them.
+#[inline(always)]
+fn fluid_sums_dispatch<V: Vector>(
+    model: &RateModel<V>,
+    fluid: &FluidState<V>,
+    grid: &CellGrid<V>,
+    i: usize,
+    switches: [bool; 4],
+) -> FluidSums<V> {
+    macro_rules! pick {
+        ($($w:literal $d:literal $v:literal $s:literal),*) => {
+            match switches {
+                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, grid, i),)*
+            }
+        };
+    }
+    pick!(
+        false false false false, false false false true, false false true false,
+        false false true true, false true false false, false true false true,
+        false true true false, false true true true, true false false false,
+        true false false true, true false true false, true false true true,
+        true true false false, true true false true, true true true false, true true true true
+    )
+}
+
+/// The fluid-neighbour sums of particle `i` (paper 1 eqs 10-11 or paper 3 eqs 37-38, the
+/// density diffusion, the viscous Laplacian of paper 3 eq 18 and the discrete Shepard sum),
+/// in the grid's storage order of the neighbours.
+#[inline(never)]
+fn fluid_sums<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
+    model: &RateModel<V>,
+    fluid: &FluidState<V>,
+    grid: &CellGrid<V>,
+    i: usize,
+) -> FluidSums<V> {
+    let kernel = &model.kernel;
+    let n = fluid.position.len();
+    // Slices of one length: a neighbour index checked against the positions is in range
+    // for all of them.
+    let (position, velocity, density) = (
+        &fluid.position[..n],
+        &fluid.velocity[..n],
+        &fluid.density[..n],
+    );
+    let (pressure, volume) = (&fluid.pressure[..n], &fluid.volume[..n]);
+    let (x_i, u_i, rho_i, p_i) = (position[i], velocity[i], density[i], pressure[i]);
+    let mut sums = FluidSums {
+        grad_p: V::ZERO,
+        div_u: 0.0,
+        diffusion: 0.0,
+        viscous: V::ZERO,
+        shepard: 0.0,
+    };
+    let viscosity = model.viscosity;
+    grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
+        let f = kernel.gradient_factor(r);
+        let grad_w = r_ij * f;
+        let volume_j = volume[j];
+        if WEIGHTED {
+            let ratio = rho_i / density[j];
+            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
+            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
+        } else {
+            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
+            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
+        }
+        if DIFFUSE {
+            sums.diffusion += model
+                .diffusion
+                .pair(rho_i, density[j], r_ij, r, f, volume_j);
+        }
+        if VISCID {
+            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
+        }
+        if SHEPARD {
+            sums.shepard += kernel.value(r) * volume_j;
+        }
+    });
+    sums
 }
 
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
