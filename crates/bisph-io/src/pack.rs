@@ -4,7 +4,8 @@
 //! - `pack.csv`: `iteration,kinetic,tpd,gradc_mean,gradc_max` (contract; `gradc_*` over
 //!   particles with `gamma = 1`, as paper 4's figs 6, 7, 10), then `gradc_mean_all,
 //!   gradc_max_all` (over all particles), `moved`, `stage` (0 lattice, 1 step 2a, 3 step 2c),
-//!   `block`. `kinetic = 1/2 sum m |dx|^2` takes the shift per iteration as the velocity;
+//!   `block`, `first_layer` (mean wall distance / dx of the particles closer than dx to a
+//!   wall), `gradc_mean_deep` (mean over the particles beyond the first layer). `kinetic = 1/2 sum m |dx|^2` takes the shift per iteration as the velocity;
 //!   `tpd = sum |x - x0|` [m]. Units of `|grad C|`: 1/m.
 //! - `particles.vtu` (packed, with `block`, `grad_c`, `wall_distance`, `displacement`,
 //!   `frozen`), `lattice.vtu` (the start), `walls.vtu` (the boundary elements);
@@ -34,7 +35,7 @@ pub fn pack_params(case: &Case, dx: f64) -> PackParams {
     q.mass = case.fluid.density * dx.powi(case.dim as i32);
     q.diffusion = p.diffusion.unwrap_or(q.diffusion);
     q.max_shift = p.max_shift.unwrap_or(q.max_shift);
-    q.push_radius = p.push_radius.unwrap_or(q.push_radius);
+    q.push_radius = p.push_radius.or(q.push_radius);
     q.stage_a_max = p.stage_a_max.unwrap_or(q.stage_a_max);
     q.plateau_window = p.plateau_window.unwrap_or(q.plateau_window);
     q.plateau_tolerance = p.plateau_tolerance.unwrap_or(q.plateau_tolerance);
@@ -146,6 +147,8 @@ pub struct BlockSummary {
     pub h: f64,
     /// Boundary elements.
     pub boundary_elements: usize,
+    /// Radius of the boundary push in use, in `dx`.
+    pub push_radius: f64,
     /// Area (2-D) or volume (3-D) of the region.
     pub region_measure: f64,
     /// Particles times `dx^d`.
@@ -166,6 +169,12 @@ pub struct BlockSummary {
     pub gradc_mean_all: [f64; 2],
     /// Largest |grad C| over all particles, lattice / packed.
     pub gradc_max_all: [f64; 2],
+    /// Mean |grad C| over the particles at least dx from every wall, lattice / packed.
+    pub gradc_mean_deep: [f64; 2],
+    /// Change of the first layer's mean wall distance (/ dx) over the second half of step
+    /// 2a (between its last evaluated iteration and the latest one at or before half-way):
+    /// how settled the layer that step 2b freezes is (NaN without such iterations).
+    pub first_layer_drift: f64,
     /// First layer (closer than dx to a wall) on the lattice.
     pub first_layer_lattice: LayerStats,
     /// First layer after packing.
@@ -200,6 +209,24 @@ pub fn pack_case(
     }
 }
 
+/// `|L(end) - L(mid)|` of the first layer's mean wall distance `L` over step 2a, where `end`
+/// is 2a's last evaluated iteration and `mid` the latest evaluated one at or before half of
+/// it (see [`BlockSummary::first_layer_drift`]).
+fn first_layer_drift(history: &[IterationStats]) -> f64 {
+    let a: Vec<&IterationStats> = history
+        .iter()
+        .filter(|s| s.stage == Stage::A && s.first_layer.is_finite())
+        .collect();
+    let Some(end) = a.last() else {
+        return f64::NAN;
+    };
+    let half = end.iteration / 2;
+    a.iter()
+        .rev()
+        .find(|s| s.iteration <= half)
+        .map_or(f64::NAN, |mid| (end.first_layer - mid.first_layer).abs())
+}
+
 fn stage_code(s: Stage) -> f64 {
     match s {
         Stage::Start => 0.0,
@@ -218,7 +245,8 @@ fn pack_dim<V: CaseDim>(
     write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
     let case = &loaded.case;
     let mut csv = String::from(
-        "iteration,kinetic,tpd,gradc_mean,gradc_max,gradc_mean_all,gradc_max_all,moved,stage,block\n",
+        "iteration,kinetic,tpd,gradc_mean,gradc_max,gradc_mean_all,gradc_max_all,moved,stage,block,\
+         first_layer,gradc_mean_deep\n",
     );
     let mut summaries = Vec::new();
     let mut all_points: Vec<[f64; 3]> = Vec::new();
@@ -249,7 +277,7 @@ fn pack_dim<V: CaseDim>(
         for s in &packed.history {
             let _ = writeln!(
                 csv,
-                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{}",
+                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e}",
                 s.iteration,
                 s.kinetic,
                 s.tpd,
@@ -259,7 +287,9 @@ fn pack_dim<V: CaseDim>(
                 s.gradc_max_all,
                 s.moved,
                 stage_code(s.stage),
-                k
+                k,
+                s.first_layer,
+                s.gradc_mean_deep
             );
         }
         let distances = p.wall_distances();
@@ -290,6 +320,7 @@ fn pack_dim<V: CaseDim>(
             dx,
             h: p.params.h,
             boundary_elements: p.walls.elements.len(),
+            push_radius: p.push_radius,
             region_measure: packed.region.measure,
             particle_measure: p.positions.len() as f64 * p.volume(),
             stage_a_iterations: iterations_a,
@@ -300,6 +331,8 @@ fn pack_dim<V: CaseDim>(
             gradc_max: [first.gradc_max, last.gradc_max],
             gradc_mean_all: [first.gradc_mean_all, last.gradc_mean_all],
             gradc_max_all: [first.gradc_max_all, last.gradc_max_all],
+            gradc_mean_deep: [first.gradc_mean_deep, last.gradc_mean_deep],
+            first_layer_drift: first_layer_drift(&packed.history),
             first_layer_lattice: LayerStats::of(&start_distances, dx),
             first_layer: LayerStats::of(&distances, dx),
             outside,

@@ -9,9 +9,15 @@
 //!   ([`integrals`]);
 //! * the shift `dx_a = -D (grad C_a - B_a)` with `D = 0.5 h^2` and the boundary push
 //!   `B_a = sum_s grad gamma_as(r_push) / (2 gamma_a)` (eq 14 with `p_s = 2 p_a`), where the
-//!   push integrates only the part of the wall within `r_push = dx/2` of the particle: the
-//!   "ramp" of paper 4's fig 3c, as the authors' code does with short edges (a ramp that is
-//!   zero at `dx/2` from the wall and grows as the particle approaches it);
+//!   push integrates only the part of the wall within `r_push` of the particle: the "ramp" of
+//!   paper 4's fig 3c, as the authors' code does with short edges (a ramp that is zero at
+//!   `r_push` from the wall and grows as the particle approaches it). In 3-D `r_push` is the
+//!   balanced radius ([`balanced_push_radius`], `0.62 dx` at `h = 2 dx`): the push holds the
+//!   first layer of a uniform lattice at `dx/2` from a flat wall in equilibrium against its
+//!   residual `grad C`, where a push within `dx/2` (a flat disc ramp) lets the layer sink
+//!   towards `0.43 dx`, where `grad C` vanishes. In 2-D the chord ramp is steep and `dx/2`
+//!   already holds the layer there (the balanced radius, `0.505 dx`, is 1% larger); see
+//!   [`default_push_radius`];
 //! * the shift capped at `0.25 dx` (eq 15);
 //! * stages: 2a moves only particles whose kernel is truncated (`gamma < 1`) until the total
 //!   particle displacement (TPD) plateaus; 2b freezes the particles next to the wall (within
@@ -43,8 +49,9 @@ pub struct PackParams {
     pub diffusion: f64,
     /// Largest shift per iteration, in `dx` (paper 4, eq 15: 0.25).
     pub max_shift: f64,
-    /// Radius of the boundary push, in `dx` (0.5: the particle radius).
-    pub push_radius: f64,
+    /// Radius of the boundary push, in `dx`; `None`: [`default_push_radius`] (`dx/2` in 2-D,
+    /// the balanced radius in 3-D).
+    pub push_radius: Option<f64>,
     /// Most iterations of stage 2a.
     pub stage_a_max: usize,
     /// TPD plateau test of stage 2a: window in iterations...
@@ -79,7 +86,7 @@ impl PackParams {
             mass: 1.0,
             diffusion: 0.5,
             max_shift: 0.25,
-            push_radius: 0.5,
+            push_radius: None,
             stage_a_max: 10_000,
             plateau_window: 100,
             plateau_tolerance: 0.01,
@@ -124,6 +131,12 @@ pub struct IterationStats {
     pub gradc_max_all: f64,
     /// Particles moved in this iteration.
     pub moved: usize,
+    /// Mean wall distance over `dx` of the particles closer than `dx` to a wall (the first
+    /// layer; NaN when not evaluated).
+    pub first_layer: f64,
+    /// Mean `|grad C|` over the particles at least `dx` from every wall (all but the first
+    /// layer, which the boundary push holds where `grad C` balances it, eq 14).
+    pub gradc_mean_deep: f64,
 }
 
 /// Wall quantities at a point.
@@ -282,6 +295,8 @@ pub struct Packer<V: WallIntegrals> {
     pub start: Vec<V>,
     /// Particles frozen in stage 2b.
     pub frozen: Vec<bool>,
+    /// Radius of the boundary push in use, in `dx`.
+    pub push_radius: f64,
     /// Step factor of each particle (see [`PackParams::step_damping`]).
     step: Vec<f64>,
     /// Each particle's previous (undamped) shift.
@@ -354,12 +369,14 @@ impl<V: WallIntegrals> Packer<V> {
             params.max_shift > 0.0 && params.max_shift <= 1.0,
             "expected a value in (0, 1]",
         )?;
-        check(
-            "push_radius",
-            params.push_radius,
-            params.push_radius >= 0.0 && params.push_radius * params.dx <= 2.0 * params.h,
-            "expected a value in [0, 2h/dx]",
-        )?;
+        if let Some(r) = params.push_radius {
+            check(
+                "push_radius",
+                r,
+                r >= 0.0 && r * params.dx <= 2.0 * params.h,
+                "expected a value in [0, 2h/dx]",
+            )?;
+        }
         check(
             "step_damping",
             params.step_damping,
@@ -388,6 +405,9 @@ impl<V: WallIntegrals> Packer<V> {
             return Err(PackError::NoParticles { dx: params.dx });
         }
         let kernel = Wendland::for_dim::<V>(params.h);
+        let push_radius = params
+            .push_radius
+            .unwrap_or_else(|| default_push_radius::<V>(&kernel, params.dx));
         let n = positions.len();
         Ok(Packer {
             volume: params.dx.powi(V::DIM as i32),
@@ -397,6 +417,7 @@ impl<V: WallIntegrals> Packer<V> {
             start: positions.clone(),
             positions,
             frozen: vec![false; n],
+            push_radius,
             step: vec![1.0; n],
             last_shift: vec![V::ZERO; n],
             near: Vec::new(),
@@ -421,7 +442,7 @@ impl<V: WallIntegrals> Packer<V> {
         let volume = self.volume;
         let d_coef = p.diffusion * p.h * p.h;
         let cap = p.max_shift * p.dx;
-        let push_radius = p.push_radius * p.dx;
+        let push_radius = self.push_radius * p.dx;
         cache
             .par_iter_mut()
             .enumerate()
@@ -488,9 +509,11 @@ impl<V: WallIntegrals> Packer<V> {
             gradc_mean_all: f64::NAN,
             gradc_max_all: f64::NAN,
             moved: 0,
+            first_layer: f64::NAN,
+            gradc_mean_deep: f64::NAN,
         };
         if full {
-            metrics(&evals, &mut stats);
+            metrics(&evals, self.params.dx, &mut stats);
         }
         if stage != Stage::Start {
             let walls = &self.walls;
@@ -639,19 +662,118 @@ impl<V: WallIntegrals> Packer<V> {
     }
 }
 
+/// The default radius of the boundary push, in units of `dx`: `1/2` (the particle radius, as
+/// the authors' code) in 2-D, where the chord ramp `2 sqrt(R^2 - d^2)` is steep enough that
+/// the settled first layer sits at `0.50 dx` (trapezoid, bunny, airfoil: 0.493-0.503 dx) and
+/// the balanced radius would change it by 1%; [`balanced_push_radius`] in 3-D, where the disc
+/// ramp `pi (R^2 - d^2)` is flat and `dx/2` lets the layer settle at 0.44 dx (sphere, dx =
+/// 0.05 m).
+pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+    if V::DIM == 2 {
+        0.5
+    } else {
+        balanced_push_radius::<V>(kernel, dx)
+    }
+}
+
+/// The balanced radius of the boundary push, in units of `dx`: the radius `R` for which the
+/// push of eq 14 (`p_s = 2 p_a` on the wall within `R`) balances the concentration gradient of
+/// the first layer of a uniform lattice (square in 2-D, cubic in 3-D) whose first layer lies
+/// at `dx/2` from a flat wall, `int_{S cap B(x, R)} W dS / (2 gamma) = grad C . n` (paper 4,
+/// eqs 5, 14), so that the layer paper 4 asks for (a particle radius from the wall) is a
+/// fixed point of the shift. The lattice sum is a midpoint rule of `gamma`'s volume
+/// integral, so `grad C` of that layer is not zero (it vanishes about `0.06 dx` nearer the
+/// wall); a push that only starts at `dx/2` (`R = dx/2`) leaves the layer where the ramp
+/// meets that residual: just inside `dx/2` in 2-D, where the chord `2 sqrt(R^2 - d^2)` makes
+/// the ramp steep, but well inside in 3-D, where the disc `pi (R^2 - d^2)` makes it flat.
+/// Depends only on the kernel and `h / dx`; at least `1/2`, at most the support.
+pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+    let last = V::DIM - 1;
+    let support = kernel.support;
+    // A flat wall x_last = 0 wider than the support on every side, normal out of the fluid.
+    let half = 2.0 * support + dx;
+    let corner = |signs: [f64; 2]| {
+        let mut c = V::ZERO;
+        for (k, s) in signs.iter().enumerate().take(last) {
+            c.set(k, s * half);
+        }
+        c
+    };
+    let corners: Vec<V> = if V::DIM == 2 {
+        vec![corner([-1.0, 0.0]), corner([1.0, 0.0])]
+    } else {
+        vec![
+            corner([-1.0, -1.0]),
+            corner([-1.0, 1.0]),
+            corner([1.0, 1.0]),
+            corner([1.0, -1.0]),
+        ]
+    };
+    let mut normal = V::ZERO;
+    normal.set(last, -1.0);
+    let mut xa = V::ZERO;
+    xa.set(last, 0.5 * dx);
+    // sum_b V_b grad_a W_ab over the half lattice (the layers at (k + 1/2) dx, k >= 0).
+    let m = (support / dx).ceil() as i64 + 1;
+    let volume = dx.powi(V::DIM as i32);
+    let tangential = if V::DIM == 2 { 0..=0 } else { -m..=m };
+    let mut sum = V::ZERO;
+    for i in -m..=m {
+        for j in tangential.clone() {
+            for k in 0..=m {
+                let mut xb = V::ZERO;
+                xb.set(0, i as f64 * dx);
+                if V::DIM == 3 {
+                    xb.set(1, j as f64 * dx);
+                }
+                xb.set(last, (k as f64 + 0.5) * dx);
+                sum -= kernel.gradient(xb - xa) * volume;
+            }
+        }
+    }
+    let (g, w) = V::element_gamma_and_integral(kernel, xa, &corners, normal);
+    let gamma = 1.0 + g;
+    let gradc = (sum.get(last) - w) / gamma;
+    let push = |r: f64| V::element_kernel_integral(kernel, xa, &corners, r) / (2.0 * gamma);
+    let (mut lo, mut hi) = (0.5 * dx, support);
+    if gradc <= 0.0 {
+        return 0.5;
+    }
+    if push(hi) <= gradc {
+        return hi / dx;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if push(mid) < gradc {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi) / dx
+}
+
 /// How close to a wall a particle must be for its shift to need the crossing test.
 fn walls_reach<V: Vector>(shift: V) -> f64 {
     shift.length() * (1.0 + 1e-9) + 1e-300
 }
 
-fn metrics<V: Vector>(evals: &[Option<Evaluation<V>>], stats: &mut IterationStats) {
+fn metrics<V: Vector>(evals: &[Option<Evaluation<V>>], dx: f64, stats: &mut IterationStats) {
     let (mut sum_i, mut max_i, mut n_i) = (0.0, 0.0f64, 0usize);
     let (mut sum_a, mut max_a, mut n_a) = (0.0, 0.0f64, 0usize);
+    let (mut sum_layer, mut n_layer, mut sum_deep, mut n_deep) = (0.0, 0usize, 0.0, 0usize);
     for e in evals.iter().flatten() {
         let g = e.gradc.length();
         sum_a += g;
         max_a = max_a.max(g);
         n_a += 1;
+        if e.distance < dx {
+            sum_layer += e.distance / dx;
+            n_layer += 1;
+        } else {
+            sum_deep += g;
+            n_deep += 1;
+        }
         if !e.truncated {
             sum_i += g;
             max_i = max_i.max(g);
@@ -665,6 +787,12 @@ fn metrics<V: Vector>(evals: &[Option<Evaluation<V>>], stats: &mut IterationStat
     if n_i > 0 {
         stats.gradc_mean = sum_i / n_i as f64;
         stats.gradc_max = max_i;
+    }
+    if n_layer > 0 {
+        stats.first_layer = sum_layer / n_layer as f64;
+    }
+    if n_deep > 0 {
+        stats.gradc_mean_deep = sum_deep / n_deep as f64;
     }
 }
 
@@ -712,6 +840,20 @@ mod tests {
             "first layer at {} dx",
             mean / dx
         );
+    }
+
+    /// The balanced push radius makes the first layer of a uniform half lattice at `dx/2` a
+    /// fixed point; the values match an independent flat-wall quadrature (about 0.505 dx in
+    /// 2-D, 0.600 dx and 0.620 dx in 3-D at h = 1.5 dx and 2 dx).
+    #[test]
+    fn balanced_push_radius_values() {
+        let dx = 0.05;
+        for (hr, r2, r3) in [(1.5, 0.505, 0.6005), (2.0, 0.505, 0.6205)] {
+            let b2 = balanced_push_radius::<DVec2>(&Wendland::new(hr * dx, 2), dx);
+            let b3 = balanced_push_radius::<glam::DVec3>(&Wendland::new(hr * dx, 3), dx);
+            assert!((b2 - r2).abs() < 2e-3, "2-D h = {hr} dx: {b2}");
+            assert!((b3 - r3).abs() < 2e-3, "3-D h = {hr} dx: {b3}");
+        }
     }
 
     #[test]
