@@ -970,7 +970,7 @@ impl ValidationCase for UsawWedge {
             crossing
         } else {
             crossing.known_failure(
-                "at dx = 0.025 a particle reaches 0.54 mm (h/100 = 0.5 mm) behind the left wedge wall just below the apex at t = 1.41 s (9 mm at dx = 0.05 before usaw.wall_tension = false)",
+                "at dx = 0.025 a particle reaches 3.97 mm behind the wedge's right wall 3 cm above its foot at t = 1.12 s (this sampling; `bisph run` trips the watch at t = 1.41 s, 0.54 mm behind the left wedge wall 7.6 mm below the apex: that particle meets the wall at 0.55 m/s, is slowed to 0.22 m/s, then its summation density (eq 84, next to the separated region) falls below rho0 1.8 mm from the wall, and with wall_tension = false the wall terms take max(p, 0) = 0, so nothing stops it) (h/100 = 0.5 mm; 9 mm at dx = 0.05 before usaw.wall_tension = false)",
             )
         });
         report.checks.push(Check::new(
