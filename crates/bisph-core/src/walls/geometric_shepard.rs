@@ -1097,15 +1097,20 @@ mod tests {
         }
     }
 
-    /// A scatter of points over `[lo, hi]` plus the given extra ones.
-    fn scatter_2d(lo: DVec2, hi: DVec2, n: usize, extra: &[DVec2]) -> Vec<DVec2> {
-        let mut s = 12345u64;
-        let mut next = || {
+    /// Seeded uniform numbers in `[0, 1)` (a 64-bit linear congruential generator).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
             s = s
                 .wrapping_mul(6364136223846793005)
                 .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        }
+    }
+
+    /// A scatter of points over `[lo, hi]` plus the given extra ones.
+    fn scatter_2d(lo: DVec2, hi: DVec2, n: usize, extra: &[DVec2]) -> Vec<DVec2> {
+        let mut next = uniform(12345);
         let mut v: Vec<DVec2> = (0..n)
             .map(|_| lo + (hi - lo) * DVec2::new(next(), next()))
             .collect();
@@ -1216,13 +1221,7 @@ mod tests {
     #[test]
     fn cache_matches_the_walk_in_3d() {
         let kernel = Wendland::new(0.1, 3);
-        let mut s = 777u64;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(777);
         let mut points: Vec<DVec3> = (0..300)
             .map(|_| DVec3::new(next(), next(), next()) * 1.2 - DVec3::splat(0.1))
             .collect();
