@@ -448,20 +448,16 @@ impl<V: Vector> Walls<V> {
         let e = &self.elements;
         let search = radius + e.max_reach;
         // An element whose centre is farther than `bound` plus its reach holds no point within
-        // `bound`; the nearest centre bounds the distance to the surface from above.
-        let mut nearest_centre = f64::INFINITY;
-        self.grid
-            .for_each_candidate_within_shifted(x, search, |j, shift| {
-                nearest_centre = nearest_centre.min((x - e.centre[j] - shift).length_squared());
-            });
+        // `bound`; every centre seen so far bounds the distance to the surface from above.
         let beyond = |j: usize, shift: V, bound: f64| {
             (x - e.centre[j] - shift).length_squared() > (bound + e.reach[j]).powi(2)
         };
-        let bound = nearest_centre.sqrt().min(radius);
         // First pass: the nearest point.
+        let mut bound = radius;
         let mut best: Option<(f64, V)> = None;
         self.grid
             .for_each_candidate_within_shifted(x, search, |j, shift| {
+                bound = bound.min((x - e.centre[j] - shift).length());
                 if beyond(j, shift, bound) {
                     return;
                 }
