@@ -25,6 +25,11 @@ pub struct Fluid<V: Vector> {
     pub acceleration: Vec<V>,
     /// Density rates `drho_i/dt` from the last rate evaluation.
     pub density_rate: Vec<f64>,
+    /// Accelerations of the step before the last (empty unless the midpoint integrator
+    /// runs): with `acceleration`, the midpoint integrator extrapolates its first guess.
+    pub earlier_acceleration: Vec<V>,
+    /// Density rates of the step before (see `earlier_acceleration`).
+    pub earlier_density_rate: Vec<f64>,
     /// Integrated Shepard factor `gamma_i` (paper 3, eq 4; 1 when unused).
     pub gamma: Vec<f64>,
     /// `grad gamma_i` at the current position (paper 3, eq 10; zero when unused).
@@ -70,6 +75,10 @@ impl<V: Vector> Fluid<V> {
         permute_into(&mut self.mass, order, &mut scratch.scalars);
         permute_into(&mut self.pressure, order, &mut scratch.scalars);
         permute_into(&mut self.density_rate, order, &mut scratch.scalars);
+        if !self.earlier_acceleration.is_empty() {
+            permute_into(&mut self.earlier_acceleration, order, &mut scratch.vectors);
+            permute_into(&mut self.earlier_density_rate, order, &mut scratch.scalars);
+        }
         permute_into(&mut self.gamma, order, &mut scratch.scalars);
         permute_into(&mut self.grad_gamma, order, &mut scratch.vectors);
         permute_into(&mut self.density_offset, order, &mut scratch.scalars);

@@ -18,8 +18,8 @@
 //! by cell, and sums run in memory order, so the order is part of the state), the wall elements'
 //! moving geometry, velocities and pressures, the pistons and free rigid bodies (attitude,
 //! position, velocities and the accelerations the integrator keeps), the integrator history (rates of the
-//! last evaluation, which the midpoint scheme uses as its first guess and Verlet as its first
-//! kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
+//! last evaluation and of the step before, from which the midpoint scheme extrapolates its first
+//! guess, and which Verlet uses as its first kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
 //! controller's memory and driving force, and the run loop's counters (next output times, frames,
 //! CSV lengths, free bodies' CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
 //! configuration) are rebuilt from the case text stored in the checkpoint.
@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
 /// (4: free rigid bodies and their CSV lengths; 3: without them).
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// File name of the checkpoint in an output directory.
@@ -121,6 +121,8 @@ pub struct SimState<V: Vector> {
     pub step: u64,
     /// Last step size.
     pub last_dt: f64,
+    /// Size of the step before the last (the midpoint first guess's earlier rates).
+    pub earlier_dt: f64,
     /// Cumulative wall work.
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
@@ -208,6 +210,7 @@ impl<V: Vector> SimState<V> {
         self.time = sim.time;
         self.step = sim.step;
         self.last_dt = sim.last_dt;
+        self.earlier_dt = sim.earlier_dt;
         self.wall_work = sim.wall_work;
         self.wall_power = sim.wall_power;
         self.viscous_dissipation = sim.viscous_dissipation;
@@ -227,6 +230,8 @@ impl<V: Vector> SimState<V> {
         d.pressure.clone_from(&s.pressure);
         d.acceleration.clone_from(&s.acceleration);
         d.density_rate.clone_from(&s.density_rate);
+        d.earlier_acceleration.clone_from(&s.earlier_acceleration);
+        d.earlier_density_rate.clone_from(&s.earlier_density_rate);
         d.gamma.clone_from(&s.gamma);
         d.grad_gamma.clone_from(&s.grad_gamma);
         d.density_offset.clone_from(&s.density_offset);
@@ -272,6 +277,9 @@ impl<V: Vector> SimState<V> {
         ]
         .iter()
         .any(|&k| k != n)
+            || [f.earlier_acceleration.len(), f.earlier_density_rate.len()]
+                .iter()
+                .any(|&k| k != n && k != 0)
         {
             return Err("fluid arrays of different lengths".into());
         }
@@ -316,6 +324,8 @@ impl<V: Vector> SimState<V> {
             && finite(&f.mass)
             && finite(&f.pressure)
             && finite(&f.density_rate)
+            && finite_v(&f.earlier_acceleration)
+            && finite(&f.earlier_density_rate)
             && finite(&f.gamma)
             && finite_v(&f.grad_gamma)
             && finite(&f.density_offset)
@@ -370,6 +380,7 @@ impl<V: Vector> SimState<V> {
             || ![
                 self.time,
                 self.last_dt,
+                self.earlier_dt,
                 self.wall_work,
                 self.wall_power,
                 self.viscous_dissipation,
@@ -457,6 +468,7 @@ impl<V: Vector> SimState<V> {
         sim.time = self.time;
         sim.step = self.step;
         sim.last_dt = self.last_dt;
+        sim.earlier_dt = self.earlier_dt;
         sim.wall_work = self.wall_work;
         sim.wall_power = self.wall_power;
         sim.viscous_dissipation = self.viscous_dissipation;
@@ -476,6 +488,8 @@ impl<V: Vector> SimState<V> {
         d.pressure.clone_from(&f.pressure);
         d.acceleration.clone_from(&f.acceleration);
         d.density_rate.clone_from(&f.density_rate);
+        d.earlier_acceleration.clone_from(&f.earlier_acceleration);
+        d.earlier_density_rate.clone_from(&f.earlier_density_rate);
         d.gamma.clone_from(&f.gamma);
         d.grad_gamma.clone_from(&f.grad_gamma);
         d.density_offset.clone_from(&f.density_offset);
@@ -729,6 +743,7 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64(s.time);
     w.u64(s.step);
     w.f64(s.last_dt);
+    w.f64(s.earlier_dt);
     w.f64(s.wall_work);
     w.f64(s.wall_power);
     w.f64(s.viscous_dissipation);
@@ -753,6 +768,8 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64s(&f.gamma);
     w.vectors(&f.grad_gamma);
     w.f64s(&f.density_offset);
+    w.vectors(&f.earlier_acceleration);
+    w.f64s(&f.earlier_density_rate);
     w.vectors(&s.centre);
     w.vectors(&s.normal);
     w.f64s(&s.area);
@@ -818,6 +835,7 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         time: r.f64()?,
         step: r.u64()?,
         last_dt: r.f64()?,
+        earlier_dt: r.f64()?,
         wall_work: r.f64()?,
         wall_power: r.f64()?,
         viscous_dissipation: r.f64()?,
@@ -846,6 +864,8 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         gamma: r.f64s()?,
         grad_gamma: r.vectors()?,
         density_offset: r.f64s()?,
+        earlier_acceleration: r.vectors()?,
+        earlier_density_rate: r.f64s()?,
     };
     s.centre = r.vectors()?;
     s.normal = r.vectors()?;
@@ -1091,12 +1111,12 @@ mod tests {
     #[test]
     fn other_formats_are_refused_by_name() {
         let mut bytes = encode(&sample());
-        bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
+        bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
         let e = decode::<DVec2>(Path::new("old.bin"), &bytes).unwrap_err();
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads format 4"),
+                .contains("checkpoint format 4, this bisph reads format 5"),
             "{e}"
         );
     }

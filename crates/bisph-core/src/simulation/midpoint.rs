@@ -1,8 +1,10 @@
 //! Semi-implicit midpoint integrator (paper 1, section 5; its ref. 27), the scheme under which
 //! the energy-conserving walls conserve energy.
 //!
-//! Per step, with the neighbour grid and the positions frozen at `r^n` and the rates of the
-//! previous step as the first guess `(a, rhodot)`, iterate:
+//! Per step, with the neighbour grid and the positions frozen at `r^n`, and as the first guess
+//! `(a, rhodot)` the converged rates of the last two steps (at `t^{n-1/2}`, `t^{n-3/2}`)
+//! extrapolated linearly to `t^{n+1/2}` (the last step's rates alone on the first two steps),
+//! iterate:
 //! 1. midpoint state `u^{n+1/2} = u^n + dt/2 a`, `rho^{n+1/2} = rho^n + dt/2 rhodot`, wall
 //!    velocities at `t^{n+1/2}`;
 //! 2. new rates `(a', rhodot')` at that state;
@@ -75,6 +77,7 @@ impl<V: Vector> Simulation<V> {
         let mut previous_residue = f64::INFINITY;
         let mut iterations = 0;
         let mut residue = 0.0;
+        self.extrapolate_rates(dt);
         for m in 0..params.max_iterations.max(1) {
             iterations = m + 1;
             {
@@ -201,6 +204,38 @@ impl<V: Vector> Simulation<V> {
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
         self.refresh_pressure();
         Ok(())
+    }
+
+    /// First guess of the rates at `t^{n+1/2}`: linear extrapolation from the converged
+    /// rates of the last two steps (at `t^{n-1/2}` and `t^{n-3/2}`); keeps the rates of the
+    /// last step as the earlier ones for the next step.
+    fn extrapolate_rates(&mut self, dt: f64) {
+        let f = &mut self.fluid;
+        let n = f.len();
+        let held = self.earlier_dt > 0.0 && f.earlier_acceleration.len() == n;
+        if held {
+            let ratio = (dt + self.last_dt) / (self.last_dt + self.earlier_dt);
+            f.acceleration
+                .par_iter_mut()
+                .zip(f.earlier_acceleration.par_iter_mut())
+                .for_each(|(a, e)| {
+                    let last = *a;
+                    *a = last + (last - *e) * ratio;
+                    *e = last;
+                });
+            f.density_rate
+                .par_iter_mut()
+                .zip(f.earlier_density_rate.par_iter_mut())
+                .for_each(|(d, e)| {
+                    let last = *d;
+                    *d = last + (last - *e) * ratio;
+                    *e = last;
+                });
+        } else {
+            f.earlier_acceleration.clone_from(&f.acceleration);
+            f.earlier_density_rate.clone_from(&f.density_rate);
+        }
+        self.earlier_dt = self.last_dt;
     }
 
     /// Paper 1, eq 53, on the change of the rates between two iterations, at the midpoint

@@ -204,6 +204,8 @@ pub struct Simulation<V: Vector> {
     pub step: u64,
     /// Size of the last step.
     pub last_dt: f64,
+    /// Size of the step whose rates are in `fluid.earlier_acceleration` (0: none held).
+    pub earlier_dt: f64,
     /// Cumulative work of the fluid on walls, `int sum_j F_j . U_j dt`.
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
@@ -250,6 +252,7 @@ impl<V: Vector> Simulation<V> {
             time: 0.0,
             step: 0,
             last_dt: 0.0,
+            earlier_dt: 0.0,
             wall_work: 0.0,
             wall_power: 0.0,
             viscous_dissipation: 0.0,
@@ -480,6 +483,7 @@ impl<V: Vector> Simulation<V> {
     /// Re-evaluates the rates at the stored state (after editing velocities or densities by
     /// hand, e.g. to set an initial velocity field).
     pub fn refresh_rates(&mut self) {
+        self.earlier_dt = 0.0;
         self.stage_state(0.0);
         self.evaluate_rates();
         self.store_body_accelerations(true);
