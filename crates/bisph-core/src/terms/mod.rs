@@ -15,7 +15,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, PairList};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -39,6 +39,19 @@ pub struct Operators<V> {
     pub viscous: V,
     /// Viscous acceleration, wall part (wall shear, paper 3 eqs 18-20).
     pub wall_viscous: V,
+}
+
+/// Where the fluid sums find each particle's fluid neighbours. Both give the same neighbours
+/// in the same order with the same `r_ij` and kernel gradient factors, so the sums agree to
+/// the bit; one pair loop serves both ([`fluid_sums`]).
+#[derive(Clone, Copy, Debug)]
+pub enum FluidNeighbours<'a, V: Vector> {
+    /// Searched in the cell grid of the fluid at every evaluation.
+    Grid(&'a CellGrid<V>),
+    /// Read from a list made by [`PairList::rebuild`] over the same grid and positions, with
+    /// the kernel gradient factor as its per-pair factor (the iterations of a midpoint step,
+    /// where the positions are frozen).
+    List(&'a PairList<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -68,7 +81,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     i: usize,
@@ -86,7 +99,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let sums = fluid_sums_dispatch(
         model,
         fluid,
-        fluid_grid,
+        neighbours,
         i,
         [
             model.density_power != 0,
@@ -180,14 +193,14 @@ struct FluidSums<V> {
 fn fluid_sums_dispatch<V: Vector>(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     i: usize,
     switches: [bool; 4],
 ) -> FluidSums<V> {
     macro_rules! pick {
         ($($w:literal $d:literal $v:literal $s:literal),*) => {
             match switches {
-                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, grid, i),)*
+                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, neighbours, i),)*
             }
         };
     }
@@ -202,7 +215,7 @@ fn fluid_sums_dispatch<V: Vector>(
 
 /// The fluid-neighbour sums of particle `i` (paper 1 eqs 10-11 or paper 3 eqs 37-38, the
 /// density diffusion, the viscous Laplacian of paper 3 eq 18 and the discrete Shepard sum),
-/// in the grid's storage order of the neighbours.
+/// in the grid's storage order of the neighbours, searched or listed ([`FluidNeighbours`]).
 #[inline(never)]
 fn fluid_sums<
     V: Vector,
@@ -213,7 +226,7 @@ fn fluid_sums<
 >(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     i: usize,
 ) -> FluidSums<V> {
     let kernel = &model.kernel;
@@ -235,8 +248,8 @@ fn fluid_sums<
         shepard: 0.0,
     };
     let viscosity = model.viscosity;
-    grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
-        let f = kernel.gradient_factor(r);
+    // One pair `(j, r_ij, |r_ij|, f = kernel gradient factor)`; the only pair loop body.
+    let mut pair = |j: usize, r_ij: V, r: f64, f: f64| {
         let grad_w = r_ij * f;
         let volume_j = volume[j];
         if WEIGHTED {
@@ -258,7 +271,18 @@ fn fluid_sums<
         if SHEPARD {
             sums.shepard += kernel.value(r) * volume_j;
         }
-    });
+    };
+    match neighbours {
+        FluidNeighbours::Grid(grid) => {
+            grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
+                pair(j, r_ij, r, kernel.gradient_factor(r))
+            })
+        }
+        // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
+        FluidNeighbours::List(list) => {
+            list.for_each(i, |j, r_ij, f| pair(j, r_ij, r_ij.length(), f))
+        }
+    }
     sums
 }
 
@@ -270,7 +294,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     acceleration: &mut [V],
@@ -289,7 +313,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         .with_min_len(256)
         .for_each(|(i, (a, (drho, dissipation)))| {
             let op =
-                particle_operators(model, wall_model, fluid, fluid_grid, elements, wall_grid, i);
+                particle_operators(model, wall_model, fluid, neighbours, elements, wall_grid, i);
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;
