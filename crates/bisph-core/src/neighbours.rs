@@ -306,6 +306,7 @@ impl<V: Vector> CellGrid<V> {
 
     /// Calls `visit(j)` for every point `j` in the cells that can hold points within `radius`
     /// of `x` (a superset of them, for radii larger than one cell as well).
+    #[inline(always)]
     pub fn for_each_candidate_within(&self, x: V, radius: f64, visit: impl FnMut(usize)) {
         let span = ((radius * self.inv_cell).ceil() as i64).max(1);
         self.for_each_in_span(x, span, visit);
@@ -349,6 +350,7 @@ impl<V: Vector> CellGrid<V> {
 
     /// [`CellGrid::for_each_candidate_within`] with the image shift of each point, as in
     /// [`CellGrid::for_each_candidate_shifted`].
+    #[inline(always)]
     pub fn for_each_candidate_within_shifted(
         &self,
         x: V,
