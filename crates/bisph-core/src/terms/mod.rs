@@ -187,6 +187,61 @@ struct FluidSums<V> {
     shepard: f64,
 }
 
+/// What the pair terms of particle `i` read: its own values and the neighbours' slices
+/// (all of one length, so one bounds check covers them).
+struct PairInputs<'a, V: Vector> {
+    model: &'a RateModel<V>,
+    velocity: &'a [V],
+    density: &'a [f64],
+    pressure: &'a [f64],
+    volume: &'a [f64],
+    u_i: V,
+    rho_i: f64,
+    p_i: f64,
+}
+
+impl<V: Vector> PairInputs<'_, V> {
+    /// Adds the pair `(i, j)` with `r_ij`, `r = |r_ij|` and the kernel gradient factor `f` to
+    /// the sums of `i`: the only pair loop body of [`fluid_sums`], for searched and listed
+    /// neighbours alike (a function, not a closure with two call sites, so that it is always
+    /// inlined into both loops).
+    #[inline(always)]
+    fn add<const WEIGHTED: bool, const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
+        &self,
+        sums: &mut FluidSums<V>,
+        j: usize,
+        r_ij: V,
+        r: f64,
+        f: f64,
+    ) {
+        let (u_i, rho_i, p_i) = (self.u_i, self.rho_i, self.p_i);
+        let (velocity, density, pressure) = (self.velocity, self.density, self.pressure);
+        let grad_w = r_ij * f;
+        let volume_j = self.volume[j];
+        if WEIGHTED {
+            let ratio = rho_i / density[j];
+            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
+            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
+        } else {
+            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
+            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
+        }
+        if DIFFUSE {
+            sums.diffusion += self
+                .model
+                .diffusion
+                .pair(rho_i, density[j], r_ij, r, f, volume_j);
+        }
+        if VISCID {
+            let viscosity = self.model.viscosity;
+            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
+        }
+        if SHEPARD {
+            sums.shepard += self.model.kernel.value(r) * volume_j;
+        }
+    }
+}
+
 /// [`fluid_sums`] with its switches `[weighted, diffuse, viscid, shepard]` turned into
 /// constants, so that the pair loop of each combination carries no test of them.
 #[inline(always)]
@@ -247,41 +302,32 @@ fn fluid_sums<
         viscous: V::ZERO,
         shepard: 0.0,
     };
-    let viscosity = model.viscosity;
-    // One pair `(j, r_ij, |r_ij|, f = kernel gradient factor)`; the only pair loop body.
-    let mut pair = |j: usize, r_ij: V, r: f64, f: f64| {
-        let grad_w = r_ij * f;
-        let volume_j = volume[j];
-        if WEIGHTED {
-            let ratio = rho_i / density[j];
-            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
-            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
-        } else {
-            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
-            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
-        }
-        if DIFFUSE {
-            sums.diffusion += model
-                .diffusion
-                .pair(rho_i, density[j], r_ij, r, f, volume_j);
-        }
-        if VISCID {
-            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
-        }
-        if SHEPARD {
-            sums.shepard += kernel.value(r) * volume_j;
-        }
+    let pair = PairInputs {
+        model,
+        velocity,
+        density,
+        pressure,
+        volume,
+        u_i,
+        rho_i,
+        p_i,
     };
     match neighbours {
         FluidNeighbours::Grid(grid) => {
             grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
-                pair(j, r_ij, r, kernel.gradient_factor(r))
+                pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    &mut sums,
+                    j,
+                    r_ij,
+                    r,
+                    kernel.gradient_factor(r),
+                )
             })
         }
         // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
-        FluidNeighbours::List(list) => {
-            list.for_each(i, |j, r_ij, f| pair(j, r_ij, r_ij.length(), f))
-        }
+        FluidNeighbours::List(list) => list.for_each(i, |j, r_ij, f| {
+            pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, j, r_ij, r_ij.length(), f)
+        }),
     }
     sums
 }
