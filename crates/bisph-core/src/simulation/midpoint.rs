@@ -78,6 +78,10 @@ impl<V: Vector> Simulation<V> {
         let mut iterations = 0;
         let mut residue = 0.0;
         self.extrapolate_rates(dt);
+        // Positions and grid stay frozen through the iterations: list the pairs once.
+        if params.max_iterations > 1 {
+            self.list_pairs();
+        }
         for m in 0..params.max_iterations.max(1) {
             iterations = m + 1;
             {
@@ -133,6 +137,7 @@ impl<V: Vector> Simulation<V> {
                 break;
             }
         }
+        self.forget_pairs();
         self.last_iterations = iterations;
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;

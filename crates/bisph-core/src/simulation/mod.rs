@@ -13,11 +13,12 @@ use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, Periodicity};
+use crate::neighbours::{CellGrid, PairList, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
-    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, RateModel, Viscosity,
+    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, FluidNeighbours, RateModel,
+    Viscosity,
 };
 use crate::walls::energy_bi::EnergyConservingWalls;
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
@@ -185,7 +186,15 @@ struct Scratch<V> {
     previous_density_rate: Vec<f64>,
     drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
+    /// The fluid pairs of the current positions, with kernel gradient factors, while
+    /// `pairs_listed` (inside a midpoint step, see [`Simulation::list_pairs`]).
+    pairs: PairList<V>,
+    pairs_listed: bool,
 }
+
+/// Most bytes the listed fluid pairs of a midpoint step may take; larger runs search the
+/// neighbours at every iteration instead.
+pub const PAIR_LIST_BUDGET: usize = 2 << 30;
 
 /// The state of a running simulation.
 #[derive(Debug)]
@@ -555,6 +564,41 @@ impl<V: Vector> Simulation<V> {
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
+    /// Lists the fluid pairs at the current positions with their kernel gradient factors,
+    /// for the rate evaluations until [`Simulation::forget_pairs`] (the iterations of a
+    /// midpoint step, whose positions and grid are frozen): they then skip the neighbour
+    /// search and give the same bits. Does nothing when the list would take more than
+    /// [`PAIR_LIST_BUDGET`] bytes (estimated from the particle spacing, 25% over a lattice).
+    pub(crate) fn list_pairs(&mut self) {
+        let start = Instant::now();
+        let kernel = self.config.kernel;
+        let support = kernel.support / self.config.particle_spacing;
+        let per_particle = if V::DIM == 2 {
+            std::f64::consts::PI * support * support
+        } else {
+            4.0 / 3.0 * std::f64::consts::PI * support * support * support
+        };
+        let bytes =
+            1.25 * per_particle * self.fluid.len() as f64 * PairList::<V>::PAIR_BYTES as f64;
+        if !bytes.is_finite() || bytes > PAIR_LIST_BUDGET as f64 {
+            self.scratch.pairs_listed = false;
+            return;
+        }
+        let position = &self.fluid.position;
+        self.scratch
+            .pairs
+            .rebuild(&self.fluid_grid, position, position, kernel.support, |r| {
+                kernel.gradient_factor(r)
+            });
+        self.scratch.pairs_listed = true;
+        self.timings.neighbours += start.elapsed().as_secs_f64();
+    }
+
+    /// Rate evaluations search the neighbours again (call before the positions move).
+    pub(crate) fn forget_pairs(&mut self) {
+        self.scratch.pairs_listed = false;
+    }
+
     /// Pressures from the stored densities.
     pub(crate) fn refresh_pressure(&mut self) {
         let eos = self.config.eos;
@@ -602,12 +646,18 @@ impl<V: Vector> Simulation<V> {
             gamma,
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
+        let neighbours = if self.scratch.pairs_listed {
+            FluidNeighbours::List(&self.scratch.pairs)
+        } else {
+            FluidNeighbours::Grid(grid)
+        };
         self.timings.wall_pressure += match self.config.wall_model {
             WallModelChoice::Energy => sweep(
                 &model,
                 &EnergyConservingWalls,
                 &state,
                 grid,
+                neighbours,
                 walls,
                 acceleration,
                 density_rate,
@@ -623,6 +673,7 @@ impl<V: Vector> Simulation<V> {
                     &bi,
                     &state,
                     grid,
+                    neighbours,
                     walls,
                     acceleration,
                     density_rate,
@@ -656,7 +707,7 @@ impl<V: Vector> Simulation<V> {
                     &model,
                     &usaw,
                     &state,
-                    grid,
+                    neighbours,
                     elements,
                     wall_grid,
                     acceleration,
@@ -713,7 +764,7 @@ impl<V: Vector> Simulation<V> {
                         &model,
                         &EnergyConservingWalls,
                         &state,
-                        grid,
+                        FluidNeighbours::Grid(grid),
                         &walls.elements,
                         &walls.grid,
                         i,
@@ -725,7 +776,7 @@ impl<V: Vector> Simulation<V> {
                             shepard,
                         },
                         &state,
-                        grid,
+                        FluidNeighbours::Grid(grid),
                         &walls.elements,
                         &walls.grid,
                         i,
@@ -738,7 +789,7 @@ impl<V: Vector> Simulation<V> {
                             no_tension: params.no_wall_tension,
                         },
                         &state,
-                        grid,
+                        FluidNeighbours::Grid(grid),
                         &walls.elements,
                         &walls.grid,
                         i,
@@ -963,6 +1014,7 @@ fn sweep<V: Vector, W: WallModel<V>>(
     wall_model: &W,
     state: &FluidState<V>,
     fluid_grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     walls: &mut Walls<V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
@@ -975,7 +1027,7 @@ fn sweep<V: Vector, W: WallModel<V>>(
         model,
         wall_model,
         state,
-        fluid_grid,
+        neighbours,
         &walls.elements,
         &walls.grid,
         acceleration,

@@ -15,7 +15,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, PairList};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -39,6 +39,19 @@ pub struct Operators<V> {
     pub viscous: V,
     /// Viscous acceleration, wall part (wall shear, paper 3 eqs 18-20).
     pub wall_viscous: V,
+}
+
+/// Where the fluid sums find each particle's fluid neighbours. Both give the same neighbours
+/// in the same order with the same `r_ij` and kernel gradient factors, so the sums agree to
+/// the bit; one pair loop serves both ([`fluid_sums`]).
+#[derive(Clone, Copy, Debug)]
+pub enum FluidNeighbours<'a, V: Vector> {
+    /// Searched in the cell grid of the fluid at every evaluation.
+    Grid(&'a CellGrid<V>),
+    /// Read from a list made by [`PairList::rebuild`] over the same grid and positions, with
+    /// the kernel gradient factor as its per-pair factor (the iterations of a midpoint step,
+    /// where the positions are frozen).
+    List(&'a PairList<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -68,7 +81,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     i: usize,
@@ -86,7 +99,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let sums = fluid_sums_dispatch(
         model,
         fluid,
-        fluid_grid,
+        neighbours,
         i,
         [
             model.density_power != 0,
@@ -174,20 +187,75 @@ struct FluidSums<V> {
     shepard: f64,
 }
 
+/// What the pair terms of particle `i` read: its own values and the neighbours' slices
+/// (all of one length, so one bounds check covers them).
+struct PairInputs<'a, V: Vector> {
+    model: &'a RateModel<V>,
+    velocity: &'a [V],
+    density: &'a [f64],
+    pressure: &'a [f64],
+    volume: &'a [f64],
+    u_i: V,
+    rho_i: f64,
+    p_i: f64,
+}
+
+impl<V: Vector> PairInputs<'_, V> {
+    /// Adds the pair `(i, j)` with `r_ij`, `r = |r_ij|` and the kernel gradient factor `f` to
+    /// the sums of `i`: the only pair loop body of [`fluid_sums`], for searched and listed
+    /// neighbours alike (a function, not a closure with two call sites, so that it is always
+    /// inlined into both loops).
+    #[inline(always)]
+    fn add<const WEIGHTED: bool, const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
+        &self,
+        sums: &mut FluidSums<V>,
+        j: usize,
+        r_ij: V,
+        r: f64,
+        f: f64,
+    ) {
+        let (u_i, rho_i, p_i) = (self.u_i, self.rho_i, self.p_i);
+        let (velocity, density, pressure) = (self.velocity, self.density, self.pressure);
+        let grad_w = r_ij * f;
+        let volume_j = self.volume[j];
+        if WEIGHTED {
+            let ratio = rho_i / density[j];
+            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
+            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
+        } else {
+            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
+            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
+        }
+        if DIFFUSE {
+            sums.diffusion += self
+                .model
+                .diffusion
+                .pair(rho_i, density[j], r_ij, r, f, volume_j);
+        }
+        if VISCID {
+            let viscosity = self.model.viscosity;
+            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
+        }
+        if SHEPARD {
+            sums.shepard += self.model.kernel.value(r) * volume_j;
+        }
+    }
+}
+
 /// [`fluid_sums`] with its switches `[weighted, diffuse, viscid, shepard]` turned into
 /// constants, so that the pair loop of each combination carries no test of them.
 #[inline(always)]
 fn fluid_sums_dispatch<V: Vector>(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     i: usize,
     switches: [bool; 4],
 ) -> FluidSums<V> {
     macro_rules! pick {
         ($($w:literal $d:literal $v:literal $s:literal),*) => {
             match switches {
-                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, grid, i),)*
+                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, neighbours, i),)*
             }
         };
     }
@@ -202,7 +270,7 @@ fn fluid_sums_dispatch<V: Vector>(
 
 /// The fluid-neighbour sums of particle `i` (paper 1 eqs 10-11 or paper 3 eqs 37-38, the
 /// density diffusion, the viscous Laplacian of paper 3 eq 18 and the discrete Shepard sum),
-/// in the grid's storage order of the neighbours.
+/// in the grid's storage order of the neighbours, searched or listed ([`FluidNeighbours`]).
 #[inline(never)]
 fn fluid_sums<
     V: Vector,
@@ -213,7 +281,7 @@ fn fluid_sums<
 >(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     i: usize,
 ) -> FluidSums<V> {
     let kernel = &model.kernel;
@@ -234,31 +302,33 @@ fn fluid_sums<
         viscous: V::ZERO,
         shepard: 0.0,
     };
-    let viscosity = model.viscosity;
-    grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
-        let f = kernel.gradient_factor(r);
-        let grad_w = r_ij * f;
-        let volume_j = volume[j];
-        if WEIGHTED {
-            let ratio = rho_i / density[j];
-            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
-            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
-        } else {
-            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
-            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
+    let pair = PairInputs {
+        model,
+        velocity,
+        density,
+        pressure,
+        volume,
+        u_i,
+        rho_i,
+        p_i,
+    };
+    match neighbours {
+        FluidNeighbours::Grid(grid) => {
+            grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
+                pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    &mut sums,
+                    j,
+                    r_ij,
+                    r,
+                    kernel.gradient_factor(r),
+                )
+            })
         }
-        if DIFFUSE {
-            sums.diffusion += model
-                .diffusion
-                .pair(rho_i, density[j], r_ij, r, f, volume_j);
-        }
-        if VISCID {
-            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
-        }
-        if SHEPARD {
-            sums.shepard += kernel.value(r) * volume_j;
-        }
-    });
+        // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
+        FluidNeighbours::List(list) => list.for_each(i, |j, r_ij, f| {
+            pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, j, r_ij, r_ij.length(), f)
+        }),
+    }
     sums
 }
 
@@ -270,7 +340,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
+    neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     acceleration: &mut [V],
@@ -289,7 +359,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         .with_min_len(256)
         .for_each(|(i, (a, (drho, dissipation)))| {
             let op =
-                particle_operators(model, wall_model, fluid, fluid_grid, elements, wall_grid, i);
+                particle_operators(model, wall_model, fluid, neighbours, elements, wall_grid, i);
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;
