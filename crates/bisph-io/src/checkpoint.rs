@@ -35,8 +35,12 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (4: free rigid bodies and their CSV lengths; 3: without them).
+/// (5: the midpoint first guess's earlier rates and step; 4: free rigid bodies and their CSV
+/// lengths; 3: without them).
 pub const FORMAT_VERSION: u32 = 5;
+/// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
+/// by it resumes with the first guess of a fresh start (last rates) for its first two steps.
+pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// File name of the checkpoint in an output directory.
@@ -735,7 +739,8 @@ impl<'a> Reader<'a> {
     }
 }
 
-fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
+fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
+    let has_earlier_rates = format >= 5;
     let mut w = Writer(Vec::new());
     w.str(&c.case_source);
     w.str(&c.case_text);
@@ -743,7 +748,9 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64(s.time);
     w.u64(s.step);
     w.f64(s.last_dt);
-    w.f64(s.earlier_dt);
+    if has_earlier_rates {
+        w.f64(s.earlier_dt);
+    }
     w.f64(s.wall_work);
     w.f64(s.wall_power);
     w.f64(s.viscous_dissipation);
@@ -768,8 +775,10 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.f64s(&f.gamma);
     w.vectors(&f.grad_gamma);
     w.f64s(&f.density_offset);
-    w.vectors(&f.earlier_acceleration);
-    w.f64s(&f.earlier_density_rate);
+    if has_earlier_rates {
+        w.vectors(&f.earlier_acceleration);
+        w.f64s(&f.earlier_density_rate);
+    }
     w.vectors(&s.centre);
     w.vectors(&s.normal);
     w.f64s(&s.area);
@@ -827,7 +836,8 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
     w.0
 }
 
-fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
+fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>, String> {
+    let has_earlier_rates = format >= 5;
     let mut r = Reader { bytes, at: 0 };
     let case_source = r.str()?;
     let case_text = r.str()?;
@@ -835,7 +845,7 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         time: r.f64()?,
         step: r.u64()?,
         last_dt: r.f64()?,
-        earlier_dt: r.f64()?,
+        earlier_dt: if has_earlier_rates { r.f64()? } else { 0.0 },
         wall_work: r.f64()?,
         wall_power: r.f64()?,
         viscous_dissipation: r.f64()?,
@@ -864,8 +874,16 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
         gamma: r.f64s()?,
         grad_gamma: r.vectors()?,
         density_offset: r.f64s()?,
-        earlier_acceleration: r.vectors()?,
-        earlier_density_rate: r.f64s()?,
+        earlier_acceleration: if has_earlier_rates {
+            r.vectors()?
+        } else {
+            Vec::new()
+        },
+        earlier_density_rate: if has_earlier_rates {
+            r.f64s()?
+        } else {
+            Vec::new()
+        },
     };
     s.centre = r.vectors()?;
     s.normal = r.vectors()?;
@@ -944,10 +962,15 @@ fn decode_payload<V: Vector>(bytes: &[u8]) -> Result<Checkpoint<V>, String> {
 
 /// The whole file's bytes.
 pub fn encode<V: Vector>(c: &Checkpoint<V>) -> Vec<u8> {
-    let payload = encode_payload(c);
+    encode_format(c, FORMAT_VERSION)
+}
+
+/// The file's bytes in layout `format` (the current one, or an older one that tests read back).
+fn encode_format<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
+    let payload = encode_payload(c, format);
     let mut w = Writer(Vec::with_capacity(payload.len() + 64));
     w.0.extend_from_slice(MAGIC);
-    w.u32(FORMAT_VERSION);
+    w.u32(format);
     w.str(BISPH_VERSION);
     w.u32(V::DIM as u32);
     w.u64(payload.len() as u64);
@@ -986,9 +1009,9 @@ pub fn decode<V: Vector>(path: &Path, bytes: &[u8]) -> Result<Checkpoint<V>, Che
     }
     let mut r = Reader { bytes, at: 8 };
     let format = r.u32().map_err(damaged)?;
-    if format != FORMAT_VERSION {
+    if !(OLDEST_FORMAT_READ..=FORMAT_VERSION).contains(&format) {
         return Err(foreign(format!(
-            "checkpoint format {format}, this bisph reads format {FORMAT_VERSION}"
+            "checkpoint format {format}, this bisph reads formats {OLDEST_FORMAT_READ} to {FORMAT_VERSION}"
         )));
     }
     let version = r.str().map_err(damaged)?;
@@ -1020,7 +1043,7 @@ pub fn decode<V: Vector>(path: &Path, bytes: &[u8]) -> Result<Checkpoint<V>, Che
     if r.at != body.len() {
         return Err(damaged("bytes after the payload".into()));
     }
-    decode_payload(payload).map_err(damaged)
+    decode_payload(payload, format).map_err(damaged)
 }
 
 /// Reads and decodes `path`.
@@ -1111,14 +1134,30 @@ mod tests {
     #[test]
     fn other_formats_are_refused_by_name() {
         let mut bytes = encode(&sample());
-        bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
+        bytes[8..12].copy_from_slice(&3u32.to_le_bytes());
         let e = decode::<DVec2>(Path::new("old.bin"), &bytes).unwrap_err();
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 4, this bisph reads format 5"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 5"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn format_4_reads_without_the_earlier_rates() {
+        let mut c = sample();
+        c.sim.earlier_dt = 1e-3;
+        c.sim.fluid.earlier_acceleration = c.sim.fluid.acceleration.clone();
+        c.sim.fluid.earlier_density_rate = c.sim.fluid.density_rate.clone();
+        let back = decode::<DVec2>(Path::new("v4.bin"), &encode_format(&c, 4)).unwrap();
+        assert_eq!(back.sim.earlier_dt, 0.0);
+        assert!(back.sim.fluid.earlier_acceleration.is_empty());
+        assert!(back.sim.fluid.earlier_density_rate.is_empty());
+        c.sim.earlier_dt = 0.0;
+        c.sim.fluid.earlier_acceleration.clear();
+        c.sim.fluid.earlier_density_rate.clear();
+        assert_eq!(encode(&back), encode(&c));
     }
 
     #[test]
