@@ -20,7 +20,7 @@ use crate::terms::{
     compute_rates, particle_operators, DensityDiffusion, DiffusionForm, FluidNeighbours, RateModel,
     Viscosity,
 };
-use crate::walls::energy_bi::EnergyConservingWalls;
+use crate::walls::energy_bi::{EnergyConservingWalls, ListedEnergyWalls};
 use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
 use crate::walls::usaw::{self, UsawWalls, Vertices, WallInterpolation};
 use crate::walls::WallModel;
@@ -190,6 +190,12 @@ struct Scratch<V> {
     /// `pairs_listed` (inside a midpoint step, see [`Simulation::list_pairs`]).
     pairs: PairList<V>,
     pairs_listed: bool,
+    /// The particle-element and element-particle pairs of the current positions with the
+    /// kernel values, while `wall_pairs_listed` (energy-conserving walls inside a midpoint
+    /// step, see [`Simulation::list_pairs`]).
+    particle_elements: PairList<V>,
+    element_particles: PairList<V>,
+    wall_pairs_listed: bool,
 }
 
 /// Most bytes the listed fluid pairs of a midpoint step may take; larger runs search the
@@ -591,12 +597,33 @@ impl<V: Vector> Simulation<V> {
                 kernel.gradient_factor(r)
             });
         self.scratch.pairs_listed = true;
+        // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
+        // (once per side); a wetted element sees at most half a kernel sphere of particles.
+        let elements = self.walls.elements.len();
+        let wall_bytes = 1.25 * per_particle * elements as f64 * PairList::<V>::PAIR_BYTES as f64;
+        if matches!(self.config.wall_model, WallModelChoice::Energy)
+            && elements > 0
+            && bytes + wall_bytes <= PAIR_LIST_BUDGET as f64
+        {
+            let s = &mut self.scratch;
+            ListedEnergyWalls::rebuild(
+                &kernel,
+                &mut s.particle_elements,
+                &mut s.element_particles,
+                &self.walls.elements,
+                &self.walls.grid,
+                position,
+                &self.fluid_grid,
+            );
+            s.wall_pairs_listed = true;
+        }
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
     /// Rate evaluations search the neighbours again (call before the positions move).
     pub(crate) fn forget_pairs(&mut self) {
         self.scratch.pairs_listed = false;
+        self.scratch.wall_pairs_listed = false;
     }
 
     /// Pressures from the stored densities.
@@ -652,6 +679,20 @@ impl<V: Vector> Simulation<V> {
             FluidNeighbours::Grid(grid)
         };
         self.timings.wall_pressure += match self.config.wall_model {
+            WallModelChoice::Energy if self.scratch.wall_pairs_listed => sweep(
+                &model,
+                &ListedEnergyWalls {
+                    particle_elements: &self.scratch.particle_elements,
+                    element_particles: &self.scratch.element_particles,
+                },
+                &state,
+                grid,
+                neighbours,
+                walls,
+                acceleration,
+                density_rate,
+                viscous_power,
+            ),
             WallModelChoice::Energy => sweep(
                 &model,
                 &EnergyConservingWalls,

@@ -116,6 +116,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         shepard,
     } = sums;
     let view = ParticleView {
+        index: i,
         x: x_i,
         u: u_i,
         p: p_i,

@@ -11,7 +11,7 @@
 use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, PairList};
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
@@ -40,19 +40,130 @@ impl<V: Vector> WallModel<V> for EnergyConservingWalls {
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> WallTerms<V> {
-        let (x, u, p) = (a.x, a.u, a.p);
-        let mut normal_sum = V::ZERO;
-        let mut relative_flux = 0.0;
-        grid.for_each_neighbour(x, &elements.centre, kernel.support, |j, _, r| {
-            let ws = kernel.value(r) * elements.area[j];
-            let n = elements.normal[j];
-            normal_sum += n * ws;
-            relative_flux += (elements.velocity[j] - u).dot(n) * ws;
+        let mut sums = ElementSums::new(a.u);
+        grid.for_each_neighbour(a.x, &elements.centre, kernel.support, |j, _, r| {
+            sums.add(elements, j, kernel.value(r))
         });
-        WallTerms {
-            pressure_gradient: normal_sum * (2.0 * p),
-            velocity_divergence: 2.0 * relative_flux,
+        sums.terms(a.p)
+    }
+}
+
+/// The element sums of eqs 51-52 for one particle with velocity `u`: `sum_j n_j W_ij s_j` and
+/// `sum_j (U_j - u) . n_j W_ij s_j`, in the order the elements are added.
+struct ElementSums<V> {
+    u: V,
+    normal_sum: V,
+    relative_flux: f64,
+}
+
+impl<V: Vector> ElementSums<V> {
+    #[inline(always)]
+    fn new(u: V) -> Self {
+        ElementSums {
+            u,
+            normal_sum: V::ZERO,
+            relative_flux: 0.0,
         }
+    }
+
+    /// Adds element `j` with the kernel value `w = W_ij`.
+    #[inline(always)]
+    fn add(&mut self, elements: &BoundaryElements<V>, j: usize, w: f64) {
+        let ws = w * elements.area[j];
+        let n = elements.normal[j];
+        self.normal_sum += n * ws;
+        self.relative_flux += (elements.velocity[j] - self.u).dot(n) * ws;
+    }
+
+    /// Eqs 51-52 for the particle pressure `p`.
+    #[inline(always)]
+    fn terms(&self, p: f64) -> WallTerms<V> {
+        WallTerms {
+            pressure_gradient: self.normal_sum * (2.0 * p),
+            velocity_divergence: 2.0 * self.relative_flux,
+        }
+    }
+}
+
+/// [`EnergyConservingWalls`] with the particle-element pairs listed, for the iterations of a
+/// midpoint step (particles and elements frozen at `r^n`, only velocities, densities and
+/// pressures change): the same sums in the same order as the grid searches, so the same bits,
+/// without searching the grids at every iteration.
+#[derive(Clone, Copy, Debug)]
+pub struct ListedEnergyWalls<'a, V> {
+    /// For each fluid particle, its elements within the support with `W_ij` as the factor
+    /// (queries: particles, points: element centres, over the wall grid).
+    pub particle_elements: &'a PairList<V>,
+    /// For each element, its fluid particles within the support with `W_ij` as the factor
+    /// (queries: element centres, points: particles, over the fluid grid).
+    pub element_particles: &'a PairList<V>,
+}
+
+impl<V: Vector> ListedEnergyWalls<'_, V> {
+    /// Lists both pair sets at the current positions (kernel values as the factors).
+    pub fn rebuild(
+        kernel: &Wendland,
+        particle_elements: &mut PairList<V>,
+        element_particles: &mut PairList<V>,
+        elements: &BoundaryElements<V>,
+        wall_grid: &CellGrid<V>,
+        fluid_position: &[V],
+        fluid_grid: &CellGrid<V>,
+    ) {
+        let k = *kernel;
+        particle_elements.rebuild(
+            wall_grid,
+            fluid_position,
+            &elements.centre,
+            kernel.support,
+            |r| k.value(r),
+        );
+        element_particles.rebuild(
+            fluid_grid,
+            &elements.centre,
+            fluid_position,
+            kernel.support,
+            |r| k.value(r),
+        );
+    }
+}
+
+impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
+    const RENORMALISE: bool = false;
+
+    fn update_wall_pressure(
+        &self,
+        _kernel: &Wendland,
+        elements: &mut BoundaryElements<V>,
+        fluid: &FluidState<V>,
+        _fluid_grid: &CellGrid<V>,
+    ) {
+        let list = self.element_particles;
+        elements
+            .pressure
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(j, pj)| {
+                let mut sum = 0.0;
+                list.for_each(j, |i, _, w| {
+                    sum += fluid.pressure[i] * fluid.volume[i] * w;
+                });
+                *pj = 2.0 * sum;
+            });
+    }
+
+    #[inline(always)]
+    fn particle_terms(
+        &self,
+        _kernel: &Wendland,
+        a: &ParticleView<V>,
+        elements: &BoundaryElements<V>,
+        _grid: &CellGrid<V>,
+    ) -> WallTerms<V> {
+        let mut sums = ElementSums::new(a.u);
+        self.particle_elements
+            .for_each(a.index, |j, _, w| sums.add(elements, j, w));
+        sums.terms(a.p)
     }
 }
 

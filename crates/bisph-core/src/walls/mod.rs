@@ -536,6 +536,8 @@ pub struct WallTerms<V> {
 /// The state of one particle as a wall model sees it.
 #[derive(Clone, Copy, Debug)]
 pub struct ParticleView<V> {
+    /// Index of the particle in the fluid arrays.
+    pub index: usize,
     /// Position.
     pub x: V,
     /// Velocity.
