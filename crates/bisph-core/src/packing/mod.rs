@@ -668,6 +668,12 @@ impl<V: WallIntegrals> Packer<V> {
 /// the balanced radius would change it by 1%; [`balanced_push_radius`] in 3-D, where the disc
 /// ramp `pi (R^2 - d^2)` is flat and `dx/2` lets the layer settle at 0.44 dx (sphere, dx =
 /// 0.05 m).
+///
+/// Measured alternative in 2-D (issue 5): [`lattice_balance_distance`] (`0.437 dx` at
+/// `h = 2 dx`), a push only against compression beyond a uniform lattice's own balance point,
+/// lets flat-wall first layers settle where their relaxed `grad C` vanishes (0.473 dx) and
+/// lowers the trapezoid's mean `|grad C|` 7.9x instead of 1.7x, but the airfoil's inside (a
+/// convex solid block) then settles at 0.443 dx, outside the 10% band about `dx/2`.
 pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     if V::DIM == 2 {
         0.5
@@ -676,21 +682,18 @@ pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 
     }
 }
 
-/// The balanced radius of the boundary push, in units of `dx`: the radius `R` for which the
-/// push of eq 14 (`p_s = 2 p_a` on the wall within `R`) balances the concentration gradient of
-/// the first layer of a uniform lattice (square in 2-D, cubic in 3-D) whose first layer lies
-/// at `dx/2` from a flat wall, `int_{S cap B(x, R)} W dS / (2 gamma) = grad C . n` (paper 4,
-/// eqs 5, 14), so that the layer paper 4 asks for (a particle radius from the wall) is a
-/// fixed point of the shift. The lattice sum is a midpoint rule of `gamma`'s volume
-/// integral, so `grad C` of that layer is not zero (it vanishes about `0.06 dx` nearer the
-/// wall); a push that only starts at `dx/2` (`R = dx/2`) leaves the layer where the ramp
-/// meets that residual: just inside `dx/2` in 2-D, where the chord `2 sqrt(R^2 - d^2)` makes
-/// the ramp steep, but well inside in 3-D, where the disc `pi (R^2 - d^2)` makes it flat.
-/// Depends only on the kernel and `h / dx`; at least `1/2`, at most the support.
-pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+/// A flat wall `x_last = 0` wider than the support on every side (normal out of the fluid
+/// side `x_last > 0`) and `grad C . n_in` (paper 4, eq 5) of the first layer of a uniform half
+/// lattice (square in 2-D, cubic in 3-D) whose layers lie at `d + k dx`, `k >= 0`, evaluated
+/// at a particle of that first layer: the wall's corners, the particle, its `gamma` and
+/// `grad C . n_in`.
+fn half_lattice_first_layer<V: WallIntegrals>(
+    kernel: &Wendland,
+    dx: f64,
+    d: f64,
+) -> (Vec<V>, V, f64, f64) {
     let last = V::DIM - 1;
     let support = kernel.support;
-    // A flat wall x_last = 0 wider than the support on every side, normal out of the fluid.
     let half = 2.0 * support + dx;
     let corner = |signs: [f64; 2]| {
         let mut c = V::ZERO;
@@ -712,8 +715,8 @@ pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64
     let mut normal = V::ZERO;
     normal.set(last, -1.0);
     let mut xa = V::ZERO;
-    xa.set(last, 0.5 * dx);
-    // sum_b V_b grad_a W_ab over the half lattice (the layers at (k + 1/2) dx, k >= 0).
+    xa.set(last, d);
+    // sum_b V_b grad_a W_ab over the half lattice.
     let m = (support / dx).ceil() as i64 + 1;
     let volume = dx.powi(V::DIM as i32);
     let tangential = if V::DIM == 2 { 0..=0 } else { -m..=m };
@@ -726,7 +729,7 @@ pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64
                 if V::DIM == 3 {
                     xb.set(1, j as f64 * dx);
                 }
-                xb.set(last, (k as f64 + 0.5) * dx);
+                xb.set(last, d + k as f64 * dx);
                 sum -= kernel.gradient(xb - xa) * volume;
             }
         }
@@ -734,6 +737,47 @@ pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64
     let (g, w) = V::element_gamma_and_integral(kernel, xa, &corners, normal);
     let gamma = 1.0 + g;
     let gradc = (sum.get(last) - w) / gamma;
+    (corners, xa, gamma, gradc)
+}
+
+/// The balance distance of a uniform lattice at a flat wall, in units of `dx`: the distance
+/// `d` at which the first layer of a uniform half lattice (layers at `d + k dx`) has
+/// `grad C = 0` (paper 4, eq 5), the fixed point of eq 12 for that layer. The lattice sum is a
+/// midpoint rule of `gamma`'s volume integral, so `d` is not `dx/2`: about `0.44 dx` at
+/// `h = 2 dx` in 2-D. Bisection on `[0.25, 0.75] dx` (`grad C . n_in` grows with `d` there);
+/// `1/2` if it has no root there.
+pub fn lattice_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+    let f = |d: f64| half_lattice_first_layer::<V>(kernel, dx, d).3;
+    let (mut lo, mut hi) = (0.25 * dx, 0.75 * dx);
+    if f(lo) > 0.0 || f(hi) < 0.0 {
+        return 0.5;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi) / dx
+}
+
+/// The balanced radius of the boundary push, in units of `dx`: the radius `R` for which the
+/// push of eq 14 (`p_s = 2 p_a` on the wall within `R`) balances the concentration gradient of
+/// the first layer of a uniform lattice (square in 2-D, cubic in 3-D) whose first layer lies
+/// at `dx/2` from a flat wall, `int_{S cap B(x, R)} W dS / (2 gamma) = grad C . n` (paper 4,
+/// eqs 5, 14), so that the layer paper 4 asks for (a particle radius from the wall) is a
+/// fixed point of the shift. The lattice sum is a midpoint rule of `gamma`'s volume
+/// integral, so `grad C` of that layer is not zero (it vanishes about `0.06 dx` nearer the
+/// wall, [`lattice_balance_distance`]); a push that only starts at `dx/2` (`R = dx/2`) leaves
+/// the layer where the ramp meets that residual: just inside `dx/2` in 2-D, where the chord
+/// `2 sqrt(R^2 - d^2)` makes the ramp steep, but well inside in 3-D, where the disc
+/// `pi (R^2 - d^2)` makes it flat. Depends only on the kernel and `h / dx`; at least `1/2`, at
+/// most the support.
+pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+    let support = kernel.support;
+    let (corners, xa, gamma, gradc) = half_lattice_first_layer::<V>(kernel, dx, 0.5 * dx);
     let push = |r: f64| V::element_kernel_integral(kernel, xa, &corners, r) / (2.0 * gamma);
     let (mut lo, mut hi) = (0.5 * dx, support);
     if gradc <= 0.0 {
@@ -853,6 +897,26 @@ mod tests {
             let b3 = balanced_push_radius::<glam::DVec3>(&Wendland::new(hr * dx, 3), dx);
             assert!((b2 - r2).abs() < 2e-3, "2-D h = {hr} dx: {b2}");
             assert!((b3 - r3).abs() < 2e-3, "3-D h = {hr} dx: {b3}");
+        }
+    }
+
+    /// The first layer of a uniform half lattice has `grad C = 0` inside `dx/2` (the lattice
+    /// sum is a midpoint rule), at the same distance for every `dx` (it depends on `h / dx`).
+    #[test]
+    fn lattice_balance_distance_values() {
+        for hr in [1.5, 2.0] {
+            let mut got = Vec::new();
+            for dx in [0.02, 0.05] {
+                let k2 = Wendland::new(hr * dx, 2);
+                let d2 = lattice_balance_distance::<DVec2>(&k2, dx);
+                let d3 = lattice_balance_distance::<glam::DVec3>(&Wendland::new(hr * dx, 3), dx);
+                let g = half_lattice_first_layer::<DVec2>(&k2, dx, d2 * dx).3;
+                println!("h = {hr} dx, dx = {dx}: 2-D {d2:.4} dx, 3-D {d3:.4} dx");
+                assert!(g.abs() < 1e-9 / dx, "{g}");
+                assert!((0.4..0.5).contains(&d2) && (0.4..0.5).contains(&d3));
+                got.push((d2, d3));
+            }
+            assert!((got[0].0 - got[1].0).abs() < 1e-9 && (got[0].1 - got[1].1).abs() < 1e-9);
         }
     }
 
