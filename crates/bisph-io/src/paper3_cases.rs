@@ -435,13 +435,10 @@ impl ValidationCase for UsawChannel {
 const STILL_WATER: &str = include_str!("../../../cases/usaw-still-water.toml");
 const TANK_CORNER: &str = include_str!("../../../cases/usaw-tank-corner.toml");
 
-/// One still-water run: `t+`, the free-surface elevation, the largest particle speed and
-/// horizontal speed between samples, and when it stopped early.
+/// One still-water run: `t+`, the free-surface elevation, and when it stopped early.
 struct StillRun {
     t: Vec<f64>,
     eta: Vec<f64>,
-    max_speed: Vec<f64>,
-    max_horizontal: Vec<f64>,
     stopped: Option<String>,
 }
 
@@ -473,39 +470,133 @@ fn still_run(
     let loaded = parse_case(name, toml, &all).map_err(|e| e.to_string())?;
     let mut sim: Simulation<DVec2> = build_simulation(&loaded).map_err(|e| e.to_string())?;
     let (c0, h) = (10.0, 1.0);
-    let horizontal = |sim: &Simulation<DVec2>| {
-        sim.fluid
-            .velocity
-            .iter()
-            .map(|u| u.x.abs())
-            .fold(0.0, f64::max)
-    };
     let samples = 200;
     let mut run = StillRun {
         t: vec![0.0],
         eta: vec![surface_level(&sim, lo, hi, dx)],
-        max_speed: vec![sim.max_speed()],
-        max_horizontal: vec![horizontal(&sim)],
         stopped: None,
     };
     for k in 1..=samples {
         let target = end_plus * h / c0 * k as f64 / samples as f64;
-        let (mut peak, mut peak_x): (f64, f64) = (0.0, 0.0);
         while sim.time < target - 1e-12 {
             if let Err(e) = sim.advance(Some(target)) {
                 run.stopped = Some(format!("{e}"));
                 break;
             }
-            peak = peak.max(sim.max_speed());
-            peak_x = peak_x.max(horizontal(&sim));
         }
         if run.stopped.is_some() {
             break;
         }
         run.t.push(sim.time * c0 / h);
         run.eta.push(surface_level(&sim, lo, hi, dx));
-        run.max_speed.push(peak);
-        run.max_horizontal.push(peak_x);
+    }
+    Ok(run)
+}
+
+/// Regions of the closed tank by the particles' initial positions (Lagrangian), with
+/// `reach` the kernel support `2h`: the surface corners (within `reach` of a side wall and of
+/// the free surface: the fluid that the side-wall vertices next to the free surface reach,
+/// paper 3, 7.2), the rest of the surface band (within `reach` of the free surface), and the
+/// rest of the tank.
+const TANK_REGIONS: [&str; 3] = ["surface corners", "surface interior", "rest of the tank"];
+
+/// One closed-tank run (`h_swl = 1`, `c0 = 10`): `t+` and, per region of `TANK_REGIONS`,
+/// the largest speed and horizontal speed between samples (every step), and when it
+/// stopped early.
+struct TankRun {
+    t: Vec<f64>,
+    speed: [Vec<f64>; 3],
+    horizontal: [Vec<f64>; 3],
+    counts: [usize; 3],
+    stopped: Option<String>,
+}
+
+impl TankRun {
+    /// Largest speed (`horizontal = false`) or horizontal speed of region `g`.
+    fn peak(&self, g: usize, horizontal: bool) -> f64 {
+        let v = if horizontal {
+            &self.horizontal[g]
+        } else {
+            &self.speed[g]
+        };
+        v.iter().copied().fold(0.0, f64::max)
+    }
+    /// Largest over the whole tank.
+    fn tank_peak(&self, horizontal: bool) -> f64 {
+        (0..3).map(|g| self.peak(g, horizontal)).fold(0.0, f64::max)
+    }
+}
+
+/// Runs the closed tank `[0, width] x [0, depth]` (free surface at `depth`) to
+/// `t c0 / h_swl = end_plus`, sampling 200 times.
+fn tank_run(
+    overrides: &[String],
+    end_plus: f64,
+    width: f64,
+    depth: f64,
+) -> Result<TankRun, String> {
+    let mut all = overrides.to_vec();
+    all.push("output.plots=false".into());
+    let loaded = parse_case("<usaw-tank-corner>", TANK_CORNER, &all).map_err(|e| e.to_string())?;
+    let mut sim: Simulation<DVec2> = build_simulation(&loaded).map_err(|e| e.to_string())?;
+    let reach = sim.config.kernel.support;
+    let f = &sim.fluid;
+    let mut region = vec![2u8; f.len()];
+    for (i, r) in f.position.iter().enumerate() {
+        let surface = depth - r.y < reach;
+        let side = r.x.min(width - r.x) < reach;
+        region[f.id[i] as usize] = match (surface, side) {
+            (true, true) => 0,
+            (true, false) => 1,
+            _ => 2,
+        };
+    }
+    let mut counts = [0usize; 3];
+    for &g in &region {
+        counts[g as usize] += 1;
+    }
+    let measure = |sim: &Simulation<DVec2>| {
+        let (mut speed, mut horizontal) = ([0.0f64; 3], [0.0f64; 3]);
+        let f = &sim.fluid;
+        for (i, u) in f.velocity.iter().enumerate() {
+            let g = region[f.id[i] as usize] as usize;
+            speed[g] = speed[g].max(u.length());
+            horizontal[g] = horizontal[g].max(u.x.abs());
+        }
+        (speed, horizontal)
+    };
+    let (s0, x0) = measure(&sim);
+    let mut run = TankRun {
+        t: vec![0.0],
+        speed: std::array::from_fn(|g| vec![s0[g]]),
+        horizontal: std::array::from_fn(|g| vec![x0[g]]),
+        counts,
+        stopped: None,
+    };
+    let (c0, h) = (10.0, 1.0);
+    let samples = 200;
+    for k in 1..=samples {
+        let target = end_plus * h / c0 * k as f64 / samples as f64;
+        let (mut speed, mut horizontal) = ([0.0f64; 3], [0.0f64; 3]);
+        while sim.time < target - 1e-12 {
+            if let Err(e) = sim.advance(Some(target)) {
+                run.stopped = Some(format!("{e}"));
+                break;
+            }
+            let (s, x) = measure(&sim);
+            for g in 0..3 {
+                speed[g] = speed[g].max(s[g]);
+                horizontal[g] = horizontal[g].max(x[g]);
+            }
+        }
+        if run.stopped.is_some() {
+            break;
+        }
+        run.t.push(sim.time * c0 / h);
+        for g in 0..3 {
+            run.speed[g].push(speed[g]);
+            run.horizontal[g].push(horizontal[g]);
+        }
     }
     Ok(run)
 }
@@ -674,9 +765,13 @@ impl ValidationCase for UsawStillWater {
 
 /// `usaw-tank-corner`: paper 3, section 7.2 (fig 9): still water in a closed tank at low
 /// resolution, started in hydrostatic equilibrium, vertex pressures with the constraint of
-/// eq 82 against the hydrostatic-corrected eq 83. A flat free surface at rest exerts no
-/// horizontal force by symmetry, so the horizontal velocities come from the walls; the
-/// largest start where the free surface meets the side walls.
+/// eq 82 against the hydrostatic-corrected eq 83. The paper's explanation: a side-wall vertex
+/// next to the free surface extrapolates (eq 82) from fluid particles whose pressures are all
+/// `>= 0` and mostly deeper, so it gets a positive pressure where the hydrostatic value is
+/// about zero, and repels the fluid there; eq 83 subtracts the hydrostatic part first and
+/// gets the hydrostatic value. Checked at rest (the vertex pressure, the corner particle's
+/// push) and in motion (the peak speeds of the fluid that starts within one kernel support of
+/// a side wall and of the free surface, against the rest of the surface band).
 pub struct UsawTankCorner;
 
 impl ValidationCase for UsawTankCorner {
@@ -684,29 +779,40 @@ impl ValidationCase for UsawTankCorner {
         "usaw-tank-corner"
     }
     fn description(&self) -> &'static str {
-        "paper 3, 7.2 (fig 9): still water in a closed tank at low resolution, peak spurious speed with eq 82 vs eq 83"
+        "paper 3, 7.2 (fig 9): still water in a closed tank at low resolution, side-wall vertex pressures at the free surface and spurious speeds in the surface corners with eq 82 vs eq 83"
     }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
         let (dx, end_plus) = if quick { (0.1, 30.0) } else { (0.05, 60.0) };
+        let width = 1.0;
+        let depth = 1.0 + 0.5 * dx;
         let mut report = CaseReport {
             name: self.name().into(),
             ..Default::default()
         };
-        let mut peaks = Vec::new();
+        let rho_g_dx = 1000.0 * 9.81 * dx;
+        let mut vertex_error = Vec::new();
         let mut corner = Vec::new();
         let mut largest = Vec::new();
+        let mut runs = Vec::new();
         let mut series = Vec::new();
-        let scale = (9.81f64 * 1.0).sqrt();
-        for (label, interpolation) in [("eq 82", "neumann"), ("eq 83", "hydrostatic")] {
-            let overrides = vec![
+        // The tank 1 m wide, water 1 m deep (fluid one dx from the walls, free surface at
+        // 1 + dx/2) at spacing `dx`.
+        let overrides = |dx: f64, interpolation: &str| {
+            vec![
                 format!("resolution.dx={dx}"),
                 format!("fluid_block.0.min=[{},{}]", 0.5 * dx, 0.5 * dx),
-                format!("fluid_block.0.max=[{},{}]", 1.0 - 0.5 * dx, 1.0 + 0.5 * dx),
+                format!(
+                    "fluid_block.0.max=[{},{}]",
+                    width - 0.5 * dx,
+                    1.0 + 0.5 * dx
+                ),
                 format!("time.end={}", end_plus / 10.0),
                 format!("usaw.wall_interpolation={interpolation}"),
-            ];
-            // At rest (t = 0): the horizontal acceleration of the free-surface particle next
-            // to the left wall, the repulsion of section 7.2.
+            ]
+        };
+        for (label, interpolation) in [("eq 82", "neumann"), ("eq 83", "hydrostatic")] {
+            let overrides = overrides(dx, interpolation);
+            // At rest (t = 0): the free-surface particle next to the left wall.
             let loaded = parse_case("<usaw-tank-corner>", TANK_CORNER, &overrides)
                 .map_err(|e| e.to_string())?;
             let sim: Simulation<DVec2> = build_simulation(&loaded).map_err(|e| e.to_string())?;
@@ -715,6 +821,43 @@ impl ValidationCase for UsawTankCorner {
                 .filter(|&i| f.position[i].x < 1.5 * dx)
                 .max_by(|&i, &j| f.position[i].y.total_cmp(&f.position[j].y))
                 .ok_or("no fluid next to the wall")?;
+            // The left-wall vertex at the height of that particle (the vertex next to the
+            // free surface): its hydrostatic pressure is the particle's (the start is
+            // hydrostatic, p depends on the height only).
+            let vt = &sim.walls.vertices;
+            let vertex = (0..vt.len())
+                .filter(|&k| vt.position[k].x.abs() < 1e-9)
+                .min_by(|&i, &j| {
+                    (vt.position[i].y - f.position[top].y)
+                        .abs()
+                        .total_cmp(&(vt.position[j].y - f.position[top].y).abs())
+                })
+                .filter(|&k| (vt.position[k].y - f.position[top].y).abs() < 1e-6 * dx)
+                .ok_or("no left-wall vertex at the height of the top fluid row")?;
+            vertex_error.push((vt.pressure[vertex] - f.pressure[top]) / rho_g_dx);
+            let mut above: Vec<usize> = (0..vt.len())
+                .filter(|&k| {
+                    vt.position[k].x.abs() < 1e-9
+                        && vt.position[k].y > vt.position[vertex].y + 1e-9
+                        && vt.position[k].y < depth + sim.config.kernel.support
+                })
+                .collect();
+            above.sort_by(|&i, &j| vt.position[i].y.total_cmp(&vt.position[j].y));
+            report.notes.push(format!(
+                "at rest, {label}: left-wall vertex at y = {:.3}: p = {:.3} rho0 g dx (hydrostatic {:.3}); the vertices above it (surface at {depth:.3}), up to one support: {}",
+                vt.position[vertex].y,
+                vt.pressure[vertex] / rho_g_dx,
+                f.pressure[top] / rho_g_dx,
+                above
+                    .iter()
+                    .map(|&k| format!(
+                        "y = {:.3}: {:.3}",
+                        vt.position[k].y,
+                        vt.pressure[k] / rho_g_dx
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
             corner.push(f.acceleration[top].x.abs());
             // The largest |a| anywhere at rest, and where: with eq 83 it sits one h above the
             // floor, not at the free-surface corner.
@@ -726,42 +869,52 @@ impl ValidationCase for UsawTankCorner {
                 })
                 .ok_or("no fluid")?;
             largest.push((f.acceleration[worst].length(), f.position[worst]));
-            let run = still_run(
-                "<usaw-tank-corner>",
-                TANK_CORNER,
-                &overrides,
-                end_plus,
-                (0.0, 1.0, dx),
-            )?;
-            let peak = |v: &[f64]| v.iter().map(|v| v / scale).fold(0.0, f64::max);
-            let (pu, px) = (peak(&run.max_speed), peak(&run.max_horizontal));
+            let run = tank_run(&overrides, end_plus, width, depth)?;
             report.notes.push(format!(
-                "{label} ({interpolation}): peak speed {pu:.3e} sqrt(g h), peak horizontal speed {px:.3e} sqrt(g h), surface {:.4} -> {:.4}{}",
-                run.eta[0],
-                run.eta.last().copied().unwrap_or(f64::NAN),
+                "{label} ({interpolation}), t c0/h_swl <= {end_plus}: peak speed / peak horizontal speed [m/s]: {}; whole tank {:.4} / {:.4}{}",
+                (0..3)
+                    .map(|g| format!(
+                        "{} ({} particles) {:.4} / {:.4}",
+                        TANK_REGIONS[g],
+                        run.counts[g],
+                        run.peak(g, false),
+                        run.peak(g, true)
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                run.tank_peak(false),
+                run.tank_peak(true),
                 run.stopped
                     .as_ref()
                     .map(|s| format!("; stopped: {s}"))
                     .unwrap_or_default()
             ));
-            peaks.push((pu, px));
-            series.push((
-                format!("{label}: max |u|"),
-                run.t.clone(),
-                run.max_speed
-                    .iter()
-                    .map(|v| (v / scale).max(1e-16).log10())
-                    .collect(),
-            ));
-            series.push((
-                format!("{label}: max |u_x|"),
-                run.t,
-                run.max_horizontal
-                    .iter()
-                    .map(|v| (v / scale).max(1e-16).log10())
-                    .collect(),
-            ));
+            if let Some(s) = &run.stopped {
+                return Err(format!("{label}: stopped early: {s}"));
+            }
+            for (name, speed) in TANK_REGIONS.iter().zip(&run.speed).take(2) {
+                series.push((
+                    format!("{label}: {name}"),
+                    run.t.clone(),
+                    speed.iter().map(|v| v.max(1e-3).log10()).collect(),
+                ));
+            }
+            runs.push(run);
         }
+        report.checks.push(Check::new(
+            "at rest, eq 83: side-wall vertex at the top fluid row, |p_v - p_hydrostatic| / (rho0 g dx)",
+            vertex_error[1].abs(),
+            0.02,
+            Tolerance::AtMost,
+            "paper 3, 7.2: with the hydrostatic part subtracted every fluid particle gives the same value, so the vertex gets its hydrostatic pressure",
+        ));
+        report.checks.push(Check::new(
+            "at rest, eq 82: side-wall vertex at the top fluid row, (p_v - p_hydrostatic) / (rho0 g dx)",
+            vertex_error[0],
+            0.25,
+            Tolerance::AtLeast,
+            "paper 3, 7.2: the fluid particles used for the vertex all have p >= 0 and mostly lie deeper, so the vertex gets more than its (near zero) hydrostatic pressure: a repulsive force",
+        ));
         report.notes.push(format!(
             "at rest: |a_x| of the free-surface particle next to the side wall: eq 82 {:.3} m/s^2, eq 83 {:.3} m/s^2",
             corner[0], corner[1]
@@ -773,46 +926,90 @@ impl ValidationCase for UsawTankCorner {
             ));
         }
         report.checks.push(Check::new(
+            "at rest: corner particle |a_x|, eq 82 / eq 83",
+            corner[0] / corner[1],
+            5.0,
+            Tolerance::AtLeast,
+            "paper 3, 7.2: eq 83 gives the vertex next to the free surface its hydrostatic pressure (no repulsion)",
+        ));
+        report.checks.push(Check::new(
             "at rest, eq 83: largest |a| in the tank / corner particle |a_x|",
             largest[1].0 / corner[1],
             5.0,
             Tolerance::AtLeast,
             "with eq 83 the free-surface corner is no longer the main source: the constant-pressure part of eq 37, 2 p_a (sum_P V_b grad W_ab - grad gamma_a) / (gamma_a rho_a), is largest where p is (paper 3, 3.1: grad gamma is exact, the volume sum a quadrature)",
         ));
+        let (n, c) = (&runs[0], &runs[1]);
         report.checks.push(Check::new(
-            "at rest: corner particle |a_x|, eq 82 / eq 83",
-            corner[0] / corner[1],
-            5.0,
+            "eq 82: surface-corner peak speed / surface-interior peak speed",
+            n.peak(0, false) / n.peak(1, false),
+            2.0,
             Tolerance::AtLeast,
-            "paper 3, 7.2: eq 83 gives the vertex next to the free surface its zero pressure (no repulsion)",
+            "paper 3, 7.2 (fig 9): with eq 82 the side-wall vertices next to the free surface push the fluid there",
         ));
-        let why = "the start-up transient common to eq 82 and eq 83 sets the peak: at rest the constant-pressure part of eq 37, 2 p_a (sum_P V_b grad W_ab - grad gamma_a) / (gamma_a rho_a), is 2.0 m/s^2 one h above the floor (the particle and vertex sum is a trapezoid rule of the exact grad gamma: 0.794/m against 0.682/m at h = 2 dx, 16%), against 0.33 m/s^2 left at the corner; it scales with depth / h, so neither refinement (dx = h_swl/20: 2.5x), coarsening (h_swl/4 to h_swl/8, tank 1 or 2 m wide: 1.4-3.6x), k = 1 (2.9x), eq 84 (2.9x), nu = 0.01 (3.0x) nor a late window (both break up after t c0/h ~ 50) reaches 10x";
+        report.checks.push(Check::new(
+            "eq 83: surface-corner peak speed / surface-interior peak speed",
+            c.peak(0, false) / c.peak(1, false),
+            1.25,
+            Tolerance::AtMost,
+            "paper 3, 7.2 (fig 9): with eq 83 the surface corners move no more than the rest of the free surface",
+        ));
+        let why = "with eq 83 the surface corners move as the rest of the free surface does (the check above), at the level of the start-up motion common to both constraints: at rest the constant-pressure part of eq 37, 2 p_a (sum_P V_b grad W_ab - grad gamma_a) / (gamma_a rho_a), is 2.0 m/s^2 one h above the floor (a trapezoid rule of the exact grad gamma, 16% off at h = 2 dx), and the motion it starts reaches the surface within t c0/h_swl ~ 1-3; eq 82's corner peak is only 2.3-2.6x that level, so the ratio is 2.6-2.8 (horizontal 3.2-4.2) at h_swl = 10 and 20 dx, 2.8 (4.2) at 8 dx";
         report.checks.push(
             Check::new(
-                "peak spurious speed, eq 82 / eq 83",
-                peaks[0].0 / peaks[1].0,
+                "surface corners (within 2h of a side wall and of the free surface): peak speed, eq 82 / eq 83",
+                n.peak(0, false) / c.peak(0, false),
                 10.0,
                 Tolerance::AtLeast,
-                "paper 3, fig 9: an order of magnitude (issue 6 acceptance: tenfold)",
+                "paper 3, 7.2 (fig 9): particle movement an order of magnitude larger with eq 82 (issue 6 acceptance: tenfold)",
             )
             .known_failure(why),
         );
         report.checks.push(
             Check::new(
-                "peak horizontal spurious speed, eq 82 / eq 83",
-                peaks[0].1 / peaks[1].1,
+                "surface corners: peak horizontal speed, eq 82 / eq 83",
+                n.peak(0, true) / c.peak(0, true),
                 10.0,
                 Tolerance::AtLeast,
-                "paper 3, fig 9: an order of magnitude (issue 6 acceptance: tenfold)",
+                "paper 3, 7.2 (fig 9): an order of magnitude (issue 6 acceptance: tenfold)",
             )
             .known_failure(why),
         );
+        report.checks.push(
+            Check::new(
+                "whole tank: peak speed, eq 82 / eq 83",
+                n.tank_peak(false) / c.tank_peak(false),
+                10.0,
+                Tolerance::AtLeast,
+                "paper 3, fig 9 (issue 6 acceptance: tenfold)",
+            )
+            .known_failure("eq 82's peak is in the surface corners; eq 83's is the start-up motion common to both constraints (the floor residual of eq 37, see the surface-corner checks), reached all over the tank, and at dx = h_swl/20 by t c0/h_swl = 60 the break-up of the bulk that both constraints show after ~50"),
+        );
+        if !quick {
+            // The paper's "relatively low resolution": h_swl = 8 dx, reported.
+            let low = 0.125;
+            let pair = ["neumann", "hydrostatic"]
+                .iter()
+                .map(|i| tank_run(&overrides(low, i), end_plus, width, 1.0 + 0.5 * low))
+                .collect::<Result<Vec<_>, _>>()?;
+            report.notes.push(format!(
+                "dx = {low} (h_swl = 8 dx), t c0/h_swl <= {end_plus}: surface corners peak speed {:.4} / {:.4} m/s (eq 82 / eq 83, ratio {:.2}), horizontal {:.4} / {:.4} (ratio {:.2}); surface interior {:.4} / {:.4}",
+                pair[0].peak(0, false),
+                pair[1].peak(0, false),
+                pair[0].peak(0, false) / pair[1].peak(0, false),
+                pair[0].peak(0, true),
+                pair[1].peak(0, true),
+                pair[0].peak(0, true) / pair[1].peak(0, true),
+                pair[0].peak(1, false),
+                pair[1].peak(1, false),
+            ));
+        }
         report.plots.push(plot(
             out,
             "spurious_speed.png",
-            "closed tank from hydrostatic rest: largest particle speeds",
-            "t c0 / h",
-            "log10 speed / sqrt(g h)",
+            "closed tank from hydrostatic rest: peak speeds by region",
+            "t c0 / h_swl",
+            "log10 speed [m/s] (floor 1e-3)",
             series,
         )?);
         Ok(report)
