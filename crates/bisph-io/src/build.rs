@@ -495,6 +495,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         particle_spacing: case.resolution.dx,
         summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
         reorder_interval: 1,
+        neighbour_skin: case.time.neighbour_skin,
         elastic_bounce: case.elastic_bounce,
         periodicity,
         viscosity: bisph_core::terms::Viscosity {

@@ -268,6 +268,11 @@ pub struct TimeSection {
     /// `"verlet"` (explicit) or `"midpoint"` (semi-implicit, paper 1).
     #[serde(default)]
     pub integrator: IntegratorName,
+    /// Skin of the explicit scheme's neighbour (Verlet) list as a fraction of the kernel
+    /// support: candidates within `(1 + skin)` supports are kept across steps until a
+    /// particle has moved half the skin (0 = search the cell grid at every step).
+    #[serde(default = "default_neighbour_skin")]
+    pub neighbour_skin: f64,
 }
 
 /// Time integrator name.
@@ -346,6 +351,10 @@ impl Default for MidpointSection {
             initial_relaxation: 0.0,
         }
     }
+}
+
+fn default_neighbour_skin() -> f64 {
+    0.0
 }
 
 fn default_courant() -> f64 {
@@ -1140,6 +1149,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!(
                 "expected a value in [1, 4], found {}",
                 c.resolution.h_over_dx
+            ),
+        );
+    }
+    if !(c.time.neighbour_skin >= 0.0 && c.time.neighbour_skin <= 1.0) {
+        return e(
+            "time.neighbour_skin",
+            format!(
+                "expected a fraction of the kernel support in [0, 1], found {}",
+                c.time.neighbour_skin
             ),
         );
     }

@@ -104,11 +104,15 @@ pub struct BenchArgs {
     /// between 3 and 100).
     #[arg(long)]
     steps: Option<u64>,
+    /// Skin of the explicit scheme's neighbour list as a fraction of the support (the case key
+    /// `time.neighbour_skin`; 0 = search the cell grid at every step).
+    #[arg(long, default_value_t = 0.0)]
+    neighbour_skin: f64,
     /// Also write the results as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Internal: run one configuration `case,dim,particles,h_over_dx,threads,steps` in this
-    /// process and print its result as JSON.
+    /// Internal: run one configuration `case,dim,particles,h_over_dx,threads,steps[,skin]` in
+    /// this process and print its result as JSON.
     #[arg(long, hide = true)]
     single: Option<String>,
 }
@@ -122,15 +126,26 @@ struct Config {
     h_over_dx: f64,
     threads: usize,
     steps: u64,
+    /// `time.neighbour_skin`.
+    skin: f64,
 }
 
 impl Config {
     fn parse(text: &str) -> Result<Config, String> {
-        let bad =
-            || format!("--single expects case,dim,particles,h_over_dx,threads,steps, got {text:?}");
+        let bad = || {
+            format!(
+                "--single expects case,dim,particles,h_over_dx,threads,steps[,skin], got {text:?}"
+            )
+        };
         let parts: Vec<&str> = text.split(',').collect();
-        let [case, dim, particles, h, threads, steps] = parts[..] else {
-            return Err(bad());
+        let (case, dim, particles, h, threads, steps, skin) = match parts[..] {
+            [case, dim, particles, h, threads, steps] => {
+                (case, dim, particles, h, threads, steps, "0")
+            }
+            [case, dim, particles, h, threads, steps, skin] => {
+                (case, dim, particles, h, threads, steps, skin)
+            }
+            _ => return Err(bad()),
         };
         Ok(Config {
             case: BenchCase::parse(case).ok_or_else(bad)?,
@@ -139,18 +154,20 @@ impl Config {
             h_over_dx: h.parse().map_err(|_| bad())?,
             threads: threads.parse().map_err(|_| bad())?,
             steps: steps.parse().map_err(|_| bad())?,
+            skin: skin.parse().map_err(|_| bad())?,
         })
     }
 
     fn encode(&self) -> String {
         format!(
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{}",
             self.case.name(),
             self.dim,
             self.particles,
             self.h_over_dx,
             self.threads,
-            self.steps
+            self.steps,
+            self.skin
         )
     }
 }
@@ -229,6 +246,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                     h_over_dx,
                     threads,
                     steps,
+                    skin: args.neighbour_skin,
                 };
                 let output = Command::new(&exe)
                     .args(["bench", "--single", &config.encode()])
@@ -300,6 +318,7 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         format!("resolution.h_over_dx={}", config.h_over_dx),
         "time.integrator=\"verlet\"".into(),
         "output.plots=false".into(),
+        format!("time.neighbour_skin={}", config.skin),
     ];
     match config.case {
         BenchCase::DamBreak => {}

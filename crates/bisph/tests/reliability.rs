@@ -150,6 +150,7 @@ fn physical_nonsense_names_key_and_range() {
         ("fluid.sound_speed=0", "fluid.sound_speed", "positive"),
         ("resolution.h_over_dx=7", "resolution.h_over_dx", "[1, 4]"),
         ("time.courant=1.5", "time.courant", "(0, 1]"),
+        ("time.neighbour_skin=-0.1", "time.neighbour_skin", "[0, 1]"),
         (
             "probe.0.position=[3.0, 0.1]",
             "probe[0].position",

@@ -13,7 +13,7 @@ use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, PairList, Periodicity};
+use crate::neighbours::{CandidateList, CellGrid, PairList, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
@@ -155,6 +155,12 @@ pub struct SimConfig<V: Vector> {
     /// Reorder particles into the cell grid's storage order (rows of cells along a Morton
     /// curve) every this many steps (0 = never).
     pub reorder_interval: u64,
+    /// Skin of the explicit (Verlet) scheme's neighbour list, as a fraction of the kernel
+    /// support (0 = search the cell grid at every step): candidates within
+    /// `support (1 + skin)` are listed and kept until a particle has moved half the skin
+    /// ([`crate::neighbours::CandidateList`]); the particles are reordered only when it is
+    /// rebuilt.
+    pub neighbour_skin: f64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
     /// Periodic axes (the period along an axis is the domain's extent there).
@@ -196,6 +202,14 @@ struct Scratch<V> {
     particle_elements: PairList<V>,
     element_particles: PairList<V>,
     wall_pairs_listed: bool,
+    /// The explicit scheme's Verlet list (see [`SimConfig::neighbour_skin`]), valid while
+    /// `candidates_valid` and no particle moved more than `skin / 2` since its build.
+    candidates: CandidateList<V>,
+    candidates_valid: bool,
+    /// The list was checked for the current positions: the next rate evaluation reads it.
+    use_candidates: bool,
+    /// Absolute skin length (0: no list).
+    skin: f64,
 }
 
 /// Most bytes the listed fluid pairs of a midpoint step may take; larger runs search the
@@ -259,6 +273,18 @@ impl<V: Vector> Simulation<V> {
         probes: Vec<Probe<V>>,
     ) -> Self {
         let cell = config.kernel.support;
+        // The explicit scheme's Verlet list needs fluid cells of the listing radius (when
+        // every period can hold three of them).
+        let skin = if config.integrator == Integrator::Verlet && config.neighbour_skin > 0.0 {
+            cell * config.neighbour_skin
+        } else {
+            0.0
+        };
+        let fluid_grid = CellGrid::with_period(cell + skin, config.periodicity);
+        let (skin, fluid_grid) = match fluid_grid {
+            Ok(grid) if skin > 0.0 => (skin, Some(grid)),
+            _ => (0.0, None),
+        };
         let mut sim = Simulation {
             config,
             fluid,
@@ -284,7 +310,8 @@ impl<V: Vector> Simulation<V> {
         let period = sim.config.periodicity;
         let grid = CellGrid::with_period(cell, period)
             .expect("periods must hold three kernel supports (checked by the caller)");
-        sim.fluid_grid = grid.clone();
+        sim.fluid_grid = fluid_grid.unwrap_or_else(|| grid.clone());
+        sim.scratch.skin = skin;
         sim.walls.grid = grid;
         sim.walls.periodicity = period;
         sim.walls.wrap_elements();
@@ -558,6 +585,7 @@ impl<V: Vector> Simulation<V> {
 
     pub(crate) fn rebuild_grid(&mut self, reorder: bool) {
         let start = Instant::now();
+        self.scratch.candidates_valid = false;
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
             let sorted = Instant::now();
@@ -567,6 +595,41 @@ impl<V: Vector> Simulation<V> {
             self.fluid_grid.mark_reordered();
             self.timings.reorder += sorted.elapsed().as_secs_f64();
         }
+        self.timings.neighbours += start.elapsed().as_secs_f64();
+    }
+
+    /// The neighbour data of an explicit step at the current positions: with a skin
+    /// ([`SimConfig::neighbour_skin`]), the Verlet list is kept while it holds (no particle
+    /// moved more than half the skin; the cell grid is then kept too, its cells being the
+    /// listing radius wide, or rebuilt without reordering across periodic axes, where
+    /// particles wrap), else the grid is rebuilt (the particles reordered when
+    /// `reorder_interval` > 0) and the list with it. Without a skin, the grid is rebuilt
+    /// (reordered every `reorder_interval` steps).
+    pub(crate) fn explicit_neighbours(&mut self) {
+        let interval = self.config.reorder_interval;
+        let skin = self.scratch.skin;
+        if skin <= 0.0 {
+            self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+            return;
+        }
+        let start = Instant::now();
+        let s = &mut self.scratch;
+        if s.candidates_valid && s.candidates.holds(&self.fluid.position, 0.5 * skin) {
+            if self.config.periodicity.any() {
+                self.fluid_grid.rebuild(&self.fluid.position);
+            }
+            s.use_candidates = true;
+            self.timings.neighbours += start.elapsed().as_secs_f64();
+            return;
+        }
+        self.rebuild_grid(interval > 0);
+        let start = Instant::now();
+        let radius = self.config.kernel.support + skin;
+        self.scratch
+            .candidates
+            .rebuild(&self.fluid_grid, &self.fluid.position, radius);
+        self.scratch.candidates_valid = true;
+        self.scratch.use_candidates = true;
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
@@ -675,6 +738,8 @@ impl<V: Vector> Simulation<V> {
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         let neighbours = if self.scratch.pairs_listed {
             FluidNeighbours::List(&self.scratch.pairs)
+        } else if self.scratch.use_candidates {
+            FluidNeighbours::Candidates(&self.scratch.candidates)
         } else {
             FluidNeighbours::Grid(grid)
         };
@@ -765,6 +830,8 @@ impl<V: Vector> Simulation<V> {
             0.0
         };
         self.wall_power = self.walls.power();
+        // The list was checked for these positions only.
+        self.scratch.use_candidates = false;
         self.timings.rates += start.elapsed().as_secs_f64();
     }
 

@@ -67,8 +67,7 @@ impl<V: Vector> Simulation<V> {
         self.check_state()?;
         // 2. walls, neighbours, rates at the predicted state.
         self.walls.move_to(self.time);
-        let interval = self.config.reorder_interval;
-        self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+        self.explicit_neighbours();
         self.advance_gamma(dt);
         if summation {
             self.summation_densities(dt);

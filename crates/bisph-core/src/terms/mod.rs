@@ -15,7 +15,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, PairList};
+use crate::neighbours::{CandidateList, CellGrid, PairList};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -52,6 +52,11 @@ pub enum FluidNeighbours<'a, V: Vector> {
     /// the kernel gradient factor as its per-pair factor (the iterations of a midpoint step,
     /// where the positions are frozen).
     List(&'a PairList<V>),
+    /// Filtered from the candidates of an explicit step's Verlet list ([`CandidateList`],
+    /// still valid for the positions): the same neighbours, in the list's order (the storage
+    /// order when it was built), so sums may differ from the grid's in the last bits (and
+    /// `r_ij` too across periodic axes, where it is the minimum image).
+    Candidates(&'a CandidateList<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -316,6 +321,17 @@ fn fluid_sums<
     match neighbours {
         FluidNeighbours::Grid(grid) => {
             grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
+                pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    &mut sums,
+                    j,
+                    r_ij,
+                    r,
+                    kernel.gradient_factor(r),
+                )
+            })
+        }
+        FluidNeighbours::Candidates(list) => {
+            list.for_each_neighbour(i, x_i, position, kernel.support, |j, r_ij, r| {
                 pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
                     &mut sums,
                     j,

@@ -47,6 +47,10 @@ pub fn elastic_bounce<V: Vector>(
     };
     let visit = |i: usize, d: &mut V, mut e: Option<&mut V>, lost: &mut f64| {
         let x = position[i];
+        if grid.no_candidates(x) {
+            // No element near: nothing to reflect (`lost` stays 0).
+            return;
+        }
         let before = e
             .as_deref()
             .map_or(d.length_squared(), |e| e.length_squared());
