@@ -138,18 +138,11 @@ impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
         fluid: &FluidState<V>,
         _fluid_grid: &CellGrid<V>,
     ) {
-        let list = self.element_particles;
-        elements
-            .pressure
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(j, pj)| {
-                let mut sum = 0.0;
-                list.for_each(j, |i, _, w| {
-                    sum += fluid.pressure[i] * fluid.volume[i] * w;
-                });
-                *pj = 2.0 * sum;
-            });
+        wall_pressure_over(
+            elements,
+            fluid,
+            ElementNeighbours::List(self.element_particles),
+        );
     }
 
     #[inline(always)]
@@ -175,6 +168,30 @@ pub fn wall_pressure<V: Vector>(
     fluid: &FluidState<V>,
     fluid_grid: &CellGrid<V>,
 ) {
+    let near = ElementNeighbours::Grid {
+        kernel,
+        grid: fluid_grid,
+    };
+    wall_pressure_over(elements, fluid, near);
+}
+
+/// Where eq 71 finds the particles within an element's support: a search of the fluid grid,
+/// or the element-particle pairs listed for a midpoint step (same order, same `W_ij` bits).
+#[derive(Clone, Copy)]
+enum ElementNeighbours<'a, V: Vector> {
+    Grid {
+        kernel: &'a Wendland,
+        grid: &'a CellGrid<V>,
+    },
+    List(&'a PairList<V>),
+}
+
+/// Paper 1, eq 71 over the particles `near` gives each element.
+fn wall_pressure_over<V: Vector>(
+    elements: &mut BoundaryElements<V>,
+    fluid: &FluidState<V>,
+    near: ElementNeighbours<'_, V>,
+) {
     let centres = &elements.centre;
     elements
         .pressure
@@ -182,9 +199,16 @@ pub fn wall_pressure<V: Vector>(
         .enumerate()
         .for_each(|(j, pj)| {
             let mut sum = 0.0;
-            fluid_grid.for_each_neighbour(centres[j], fluid.position, kernel.support, |i, _, r| {
-                sum += fluid.pressure[i] * fluid.volume[i] * kernel.value(r);
-            });
+            let mut add = |i: usize, w: f64| sum += fluid.pressure[i] * fluid.volume[i] * w;
+            match near {
+                ElementNeighbours::Grid { kernel, grid } => grid.for_each_neighbour(
+                    centres[j],
+                    fluid.position,
+                    kernel.support,
+                    |i, _, r| add(i, kernel.value(r)),
+                ),
+                ElementNeighbours::List(list) => list.for_each(j, |i, _, w| add(i, w)),
+            }
             *pj = 2.0 * sum;
         });
 }
