@@ -958,28 +958,42 @@ mod tests {
         }
     }
 
-    #[test]
-    fn pair_list_repeats_the_search_in_order_and_bits() {
-        let r: Vec<f64> = pseudo_random(3000, 5).collect();
-        let p2: Vec<DVec2> = r
+    /// Pseudo-random 2-D and 3-D point clouds from `seed`, each with a period along x (and z
+    /// in 3-D) that the points fill.
+    fn point_clouds(
+        seed: u64,
+    ) -> (
+        Vec<DVec2>,
+        Periodicity<DVec2>,
+        Vec<DVec3>,
+        Periodicity<DVec3>,
+    ) {
+        let r: Vec<f64> = pseudo_random(3000, seed).collect();
+        let p2 = r
             .chunks(2)
             .map(|c| DVec2::new(c[0] - 0.1, 0.6 * c[1]))
             .collect();
-        let period = Periodicity {
+        let period2 = Periodicity {
             min: DVec2::new(-0.1, 0.0),
             length: DVec2::new(1.0, 0.0),
         };
-        check_pair_list(p2.clone(), 0.07, Periodicity::none());
-        check_pair_list(p2, 0.07, period);
-        let p3: Vec<DVec3> = r
+        let p3 = r
             .chunks(3)
             .map(|c| DVec3::new(c[0], c[1], 0.5 * c[2]))
             .collect();
-        let period = Periodicity {
+        let period3 = Periodicity {
             min: DVec3::ZERO,
             length: DVec3::new(1.0, 0.0, 0.5),
         };
-        check_pair_list(p3, 0.15, period);
+        (p2, period2, p3, period3)
+    }
+
+    #[test]
+    fn pair_list_repeats_the_search_in_order_and_bits() {
+        let (p2, period2, p3, period3) = point_clouds(5);
+        check_pair_list(p2.clone(), 0.07, Periodicity::none());
+        check_pair_list(p2, 0.07, period2);
+        check_pair_list(p3, 0.15, period3);
     }
 
     /// A Verlet list built at `points` with a skin, then every point moved by up to half the
@@ -1052,27 +1066,11 @@ mod tests {
 
     #[test]
     fn candidate_list_finds_the_neighbours_after_moves_within_half_the_skin() {
-        let r: Vec<f64> = pseudo_random(3000, 7).collect();
-        let p2: Vec<DVec2> = r
-            .chunks(2)
-            .map(|c| DVec2::new(c[0] - 0.1, 0.6 * c[1]))
-            .collect();
-        let period = Periodicity {
-            min: DVec2::new(-0.1, 0.0),
-            length: DVec2::new(1.0, 0.0),
-        };
+        let (p2, period2, p3, period3) = point_clouds(7);
         check_candidate_list(p2.clone(), 0.07, Periodicity::none());
-        check_candidate_list(p2, 0.07, period);
-        let p3: Vec<DVec3> = r
-            .chunks(3)
-            .map(|c| DVec3::new(c[0], c[1], 0.5 * c[2]))
-            .collect();
-        let period = Periodicity {
-            min: DVec3::ZERO,
-            length: DVec3::new(1.0, 0.0, 0.5),
-        };
+        check_candidate_list(p2, 0.07, period2);
         check_candidate_list(p3.clone(), 0.13, Periodicity::none());
-        check_candidate_list(p3, 0.13, period);
+        check_candidate_list(p3, 0.13, period3);
     }
 
     #[test]
