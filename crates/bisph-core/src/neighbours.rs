@@ -703,6 +703,11 @@ impl<V: Vector> CandidateList<V> {
         largest <= drift * drift
     }
 
+    /// The points as they were at the build.
+    pub fn origin(&self) -> &[V] {
+        &self.origin
+    }
+
     /// Number of points listed.
     pub fn len(&self) -> usize {
         self.origin.len()

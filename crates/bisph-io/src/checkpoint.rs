@@ -19,7 +19,8 @@
 //! moving geometry, velocities and pressures, the pistons and free rigid bodies (attitude,
 //! position, velocities and the accelerations the integrator keeps), the integrator history (rates of the
 //! last evaluation and of the step before, from which the midpoint scheme extrapolates its first
-//! guess, and which Verlet uses as its first kick), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
+//! guess, and which Verlet uses as its first kick), the positions the explicit scheme's Verlet
+//! list was built at (so the same list is rebuilt and kept for the same steps), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
 //! controller's memory and driving force, and the run loop's counters (next output times, frames,
 //! CSV lengths, free bodies' CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
 //! configuration) are rebuilt from the case text stored in the checkpoint.
@@ -35,11 +36,14 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (5: the midpoint first guess's earlier rates and step; 4: free rigid bodies and their CSV
-/// lengths; 3: without them).
-pub const FORMAT_VERSION: u32 = 5;
+/// (6: the positions the explicit scheme's Verlet list was built at; 5: the midpoint first
+/// guess's earlier rates and step; 4: free rigid bodies and their CSV lengths; 3: without
+/// them).
+pub const FORMAT_VERSION: u32 = 6;
 /// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
-/// by it resumes with the first guess of a fresh start (last rates) for its first two steps.
+/// by it resumes with the first guess of a fresh start (last rates) for its first two steps;
+/// format 5 is format 6 without the Verlet list's build positions, so an explicit run with a
+/// skin written by it builds its list afresh at its first step.
 pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -149,6 +153,8 @@ pub struct SimState<V: Vector> {
     pub placed_at: f64,
     /// The fluid, all arrays (ids, rates included).
     pub fluid: Fluid<V>,
+    /// Where the explicit scheme's Verlet list was built (empty without one).
+    pub neighbour_origin: Vec<V>,
     /// Element centres.
     pub centre: Vec<V>,
     /// Element normals.
@@ -239,6 +245,10 @@ impl<V: Vector> SimState<V> {
         d.gamma.clone_from(&s.gamma);
         d.grad_gamma.clone_from(&s.grad_gamma);
         d.density_offset.clone_from(&s.density_offset);
+        self.neighbour_origin.clear();
+        if let Some(origin) = sim.neighbour_list_origin() {
+            self.neighbour_origin.extend_from_slice(origin);
+        }
         let e = &sim.walls.elements;
         self.centre.clone_from(&e.centre);
         self.normal.clone_from(&e.normal);
@@ -286,6 +296,9 @@ impl<V: Vector> SimState<V> {
                 .any(|&k| k != n && k != 0)
         {
             return Err("fluid arrays of different lengths".into());
+        }
+        if !(self.neighbour_origin.is_empty() || self.neighbour_origin.len() == n) {
+            return Err("neighbour-list positions of another length than the fluid".into());
         }
         if n != sim.fluid.len() {
             return Err(format!(
@@ -518,7 +531,10 @@ impl<V: Vector> SimState<V> {
                 set_free_body_values(f, values);
             }
         }
-        sim.fluid_grid.rebuild(&sim.fluid.position);
+        // A list that does not fit (a damaged file whose checksum still matched) is rebuilt at
+        // the next step instead.
+        let origin = &self.neighbour_origin;
+        sim.restore_neighbour_list((!origin.is_empty()).then_some(origin));
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.refresh_gamma();
         Ok(())
@@ -741,6 +757,7 @@ impl<'a> Reader<'a> {
 
 fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     let has_earlier_rates = format >= 5;
+    let has_neighbour_origin = format >= 6;
     let mut w = Writer(Vec::new());
     w.str(&c.case_source);
     w.str(&c.case_text);
@@ -778,6 +795,9 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     if has_earlier_rates {
         w.vectors(&f.earlier_acceleration);
         w.f64s(&f.earlier_density_rate);
+    }
+    if has_neighbour_origin {
+        w.vectors(&s.neighbour_origin);
     }
     w.vectors(&s.centre);
     w.vectors(&s.normal);
@@ -838,6 +858,7 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
 
 fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>, String> {
     let has_earlier_rates = format >= 5;
+    let has_neighbour_origin = format >= 6;
     let mut r = Reader { bytes, at: 0 };
     let case_source = r.str()?;
     let case_text = r.str()?;
@@ -885,6 +906,9 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
             Vec::new()
         },
     };
+    if has_neighbour_origin {
+        s.neighbour_origin = r.vectors()?;
+    }
     s.centre = r.vectors()?;
     s.normal = r.vectors()?;
     s.area = r.f64s()?;
@@ -1088,6 +1112,7 @@ mod tests {
         c.sim.reach = vec![0.05];
         c.sim.pressure = vec![3.0];
         c.sim.corners = vec![DVec2::ZERO, DVec2::X];
+        c.sim.neighbour_origin = c.sim.fluid.position.iter().map(|&x| x * 0.5).collect();
         c.sim.pistons = vec![(1, 0.1, -0.2, 0.3)];
         let mut free = FreeBody::new(
             2.0,
@@ -1139,9 +1164,19 @@ mod tests {
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads formats 4 to 5"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 6"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn format_5_reads_without_the_neighbour_list() {
+        let mut c = sample();
+        c.sim.neighbour_origin = c.sim.fluid.position.clone();
+        let back = decode::<DVec2>(Path::new("v5.bin"), &encode_format(&c, 5)).unwrap();
+        assert!(back.sim.neighbour_origin.is_empty());
+        c.sim.neighbour_origin.clear();
+        assert_eq!(encode(&back), encode(&c));
     }
 
     #[test]
@@ -1155,6 +1190,7 @@ mod tests {
         assert!(back.sim.fluid.earlier_acceleration.is_empty());
         assert!(back.sim.fluid.earlier_density_rate.is_empty());
         c.sim.earlier_dt = 0.0;
+        c.sim.neighbour_origin.clear();
         c.sim.fluid.earlier_acceleration.clear();
         c.sim.fluid.earlier_density_rate.clear();
         assert_eq!(encode(&back), encode(&c));

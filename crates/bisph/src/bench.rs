@@ -105,8 +105,8 @@ pub struct BenchArgs {
     #[arg(long)]
     steps: Option<u64>,
     /// Skin of the explicit scheme's neighbour list as a fraction of the support (the case key
-    /// `time.neighbour_skin`; 0 = search the cell grid at every step).
-    #[arg(long, default_value_t = 0.0)]
+    /// `time.neighbour_skin`, the same default; 0 = search the cell grid at every step).
+    #[arg(long, default_value_t = bisph_io::case::DEFAULT_NEIGHBOUR_SKIN)]
     neighbour_skin: f64,
     /// Also write the results as JSON to this file.
     #[arg(long)]

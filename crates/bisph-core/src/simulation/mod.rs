@@ -159,7 +159,8 @@ pub struct SimConfig<V: Vector> {
     /// support (0 = search the cell grid at every step): candidates within
     /// `support (1 + skin)` are listed and kept until a particle has moved half the skin
     /// ([`crate::neighbours::CandidateList`]); the particles are reordered only when it is
-    /// rebuilt.
+    /// rebuilt. Not used by the midpoint scheme, nor when the list would exceed
+    /// [`CANDIDATE_LIST_BUDGET`].
     pub neighbour_skin: f64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
@@ -215,6 +216,22 @@ struct Scratch<V> {
 /// Most bytes the listed fluid pairs of a midpoint step may take; larger runs search the
 /// neighbours at every iteration instead.
 pub const PAIR_LIST_BUDGET: usize = 2 << 30;
+
+/// Most bytes the explicit scheme's Verlet list may take (4 per candidate); larger runs search
+/// the cell grid at every step instead.
+pub const CANDIDATE_LIST_BUDGET: usize = 8 << 30;
+
+/// Estimated pairs within `radius` of `n` particles at the case's spacing (a lattice's count
+/// plus 25%), for the list budgets.
+fn listed_pairs<V: Vector>(config: &SimConfig<V>, n: usize, radius: f64) -> f64 {
+    let r = radius / config.particle_spacing;
+    let per_particle = if V::DIM == 2 {
+        std::f64::consts::PI * r * r
+    } else {
+        4.0 / 3.0 * std::f64::consts::PI * r * r * r
+    };
+    1.25 * per_particle * n as f64
+}
 
 /// The state of a running simulation.
 #[derive(Debug)]
@@ -275,8 +292,13 @@ impl<V: Vector> Simulation<V> {
         let cell = config.kernel.support;
         // The explicit scheme's Verlet list needs fluid cells of the listing radius (when
         // every period can hold three of them).
-        let skin = if config.integrator == Integrator::Verlet && config.neighbour_skin > 0.0 {
-            cell * config.neighbour_skin
+        let skin = cell * config.neighbour_skin;
+        let list_bytes = 4.0 * listed_pairs(&config, fluid.len(), cell + skin);
+        let skin = if config.integrator == Integrator::Verlet
+            && skin > 0.0
+            && list_bytes <= CANDIDATE_LIST_BUDGET as f64
+        {
+            skin
         } else {
             0.0
         };
@@ -633,6 +655,50 @@ impl<V: Vector> Simulation<V> {
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
+    /// The positions at which the explicit scheme's Verlet list in use was built (`None`
+    /// without a skin or before the first build). A checkpoint saves them so that a resumed
+    /// run rebuilds the same list and keeps it for the same steps as an uninterrupted one.
+    pub fn neighbour_list_origin(&self) -> Option<&[V]> {
+        let s = &self.scratch;
+        (s.skin > 0.0 && s.candidates_valid).then(|| s.candidates.origin())
+    }
+
+    /// Rebuilds the Verlet list from the positions `origin` it was built at (see
+    /// [`Simulation::neighbour_list_origin`]; the particles in the order they had then, which
+    /// is kept until the next build), and the cell grid as the run had it: over `origin`, or
+    /// over the current positions where an axis is periodic (that grid is rebuilt each step).
+    /// Returns whether the list was restored: with `None`, without a skin, or when `origin`
+    /// does not fit the particles (another length, not finite, or a particle farther than half
+    /// the skin from it, so the list could miss pairs), the list is dropped instead (the next
+    /// step builds one) and the grid is built over the current positions.
+    pub fn restore_neighbour_list(&mut self, origin: Option<&[V]>) -> bool {
+        let skin = self.scratch.skin;
+        let period = self.config.periodicity;
+        let position = &self.fluid.position;
+        let fits = |origin: &[V]| {
+            origin.len() == position.len()
+                && origin.iter().zip(position).all(|(&o, &p)| {
+                    o.is_finite()
+                        && period.minimum_image(p - o).length_squared() <= 0.25 * skin * skin
+                })
+        };
+        let Some(origin) = origin.filter(|o| skin > 0.0 && fits(o)) else {
+            self.scratch.candidates_valid = false;
+            self.fluid_grid.rebuild(&self.fluid.position);
+            return false;
+        };
+        self.fluid_grid.rebuild(origin);
+        let radius = self.config.kernel.support + skin;
+        self.scratch
+            .candidates
+            .rebuild(&self.fluid_grid, origin, radius);
+        self.scratch.candidates_valid = true;
+        if period.any() {
+            self.fluid_grid.rebuild(&self.fluid.position);
+        }
+        true
+    }
+
     /// Lists the fluid pairs at the current positions with their kernel gradient factors,
     /// for the rate evaluations until [`Simulation::forget_pairs`] (the iterations of a
     /// midpoint step, whose positions and grid are frozen): they then skip the neighbour
@@ -641,14 +707,8 @@ impl<V: Vector> Simulation<V> {
     pub(crate) fn list_pairs(&mut self) {
         let start = Instant::now();
         let kernel = self.config.kernel;
-        let support = kernel.support / self.config.particle_spacing;
-        let per_particle = if V::DIM == 2 {
-            std::f64::consts::PI * support * support
-        } else {
-            4.0 / 3.0 * std::f64::consts::PI * support * support * support
-        };
-        let bytes =
-            1.25 * per_particle * self.fluid.len() as f64 * PairList::<V>::PAIR_BYTES as f64;
+        let bytes = listed_pairs(&self.config, self.fluid.len(), kernel.support)
+            * PairList::<V>::PAIR_BYTES as f64;
         if !bytes.is_finite() || bytes > PAIR_LIST_BUDGET as f64 {
             self.scratch.pairs_listed = false;
             return;
@@ -663,7 +723,8 @@ impl<V: Vector> Simulation<V> {
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
         // (once per side); a wetted element sees at most half a kernel sphere of particles.
         let elements = self.walls.elements.len();
-        let wall_bytes = 1.25 * per_particle * elements as f64 * PairList::<V>::PAIR_BYTES as f64;
+        let wall_bytes =
+            listed_pairs(&self.config, elements, kernel.support) * PairList::<V>::PAIR_BYTES as f64;
         if matches!(self.config.wall_model, WallModelChoice::Energy)
             && elements > 0
             && bytes + wall_bytes <= PAIR_LIST_BUDGET as f64
