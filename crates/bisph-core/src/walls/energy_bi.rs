@@ -41,7 +41,7 @@ impl<V: Vector> WallModel<V> for EnergyConservingWalls {
         grid: &CellGrid<V>,
     ) -> WallTerms<V> {
         let mut sums = ElementSums::new(a.u);
-        grid.for_each_neighbour(a.x, &elements.centre, kernel.support, |j, _, r| {
+        grid.for_each_sparse_neighbour(a.x, &elements.centre, kernel.support, |j, _, r| {
             sums.add(elements, j, kernel.value(r))
         });
         sums.terms(a.p)

@@ -603,7 +603,7 @@ pub trait WallModel<V: Vector>: Sync {
         grid: &CellGrid<V>,
     ) -> V {
         let mut a = V::ZERO;
-        grid.for_each_neighbour(x, &elements.centre, kernel.support, |s, r_is, r| {
+        grid.for_each_sparse_neighbour(x, &elements.centre, kernel.support, |s, r_is, r| {
             a += viscosity.wall_shear(
                 u,
                 elements.velocity[s],

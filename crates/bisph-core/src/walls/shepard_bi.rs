@@ -106,7 +106,7 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         let (x, u, p) = (a.x, a.u, a.p);
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
-        grid.for_each_neighbour(x, &elements.centre, kernel.support, |k, _, r| {
+        grid.for_each_sparse_neighbour(x, &elements.centre, kernel.support, |k, _, r| {
             let ws = kernel.value(r) * elements.area[k];
             let n = elements.normal[k];
             pressure_gradient += n * ((elements.pressure[k] + p) * ws);

@@ -399,7 +399,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         let wall_p = |p: f64| if self.no_tension { p.max(0.0) } else { p };
         let p_a = wall_p(a.p);
         v.grid
-            .for_each_neighbour(a.x, &v.position, kernel.support, |b, r_ab, r| {
+            .for_each_sparse_neighbour(a.x, &v.position, kernel.support, |b, r_ab, r| {
                 let grad_w = r_ab * kernel.gradient_factor(r);
                 let ratio = self.ratio(a.rho, v.density[b]);
                 pressure_gradient += crate::terms::pressure_gradient::pair_k(
