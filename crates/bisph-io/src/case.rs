@@ -665,8 +665,9 @@ pub struct PackSection {
     pub diffusion: Option<f64>,
     /// Largest shift per iteration (0.25).
     pub max_shift: Option<f64>,
-    /// Radius of the boundary push (default: 0.5 in 2-D, the balanced radius in 3-D, 0.62
-    /// at h = 2 dx; see `bisph_core::packing::default_push_radius`).
+    /// Radius of the boundary push (default: the relaxed balance distance in 2-D, 0.472 at
+    /// h = 2 dx; the balanced radius in 3-D, 0.62 at h = 2 dx; see
+    /// `bisph_core::packing::default_push_radius`).
     pub push_radius: Option<f64>,
     /// Most iterations of stage 2a (10000).
     pub stage_a_max: Option<usize>,

@@ -11,12 +11,16 @@
 //!   `B_a = sum_s grad gamma_as(r_push) / (2 gamma_a)` (eq 14 with `p_s = 2 p_a`), where the
 //!   push integrates only the part of the wall within `r_push` of the particle: the "ramp" of
 //!   paper 4's fig 3c, as the authors' code does with short edges (a ramp that is zero at
-//!   `r_push` from the wall and grows as the particle approaches it). In 3-D `r_push` is the
-//!   balanced radius ([`balanced_push_radius`], `0.62 dx` at `h = 2 dx`): the push holds the
-//!   first layer of a uniform lattice at `dx/2` from a flat wall in equilibrium against its
-//!   residual `grad C`, where a push within `dx/2` (a flat disc ramp) lets the layer sink
-//!   towards `0.43 dx`, where `grad C` vanishes. In 2-D the chord ramp is steep and `dx/2`
-//!   already holds the layer there (the balanced radius, `0.505 dx`, is 1% larger); see
+//!   `r_push` from the wall and grows as the particle approaches it). In 2-D `r_push` is the
+//!   relaxed balance distance ([`relaxed_balance_distance`], `0.472 dx` at `h = 2 dx`): the
+//!   wall distance at which a uniformly dense first layer has `grad C = 0` once the layers
+//!   behind it have relaxed, so the push leaves eq 5's own equilibrium alone and acts only
+//!   against compression beyond it (a push from `dx/2`, the particle radius, holds flat-wall
+//!   layers against eq 5's midpoint residual, which then dominates the packed `|grad C|`). In
+//!   3-D `r_push` is the balanced radius ([`balanced_push_radius`], `0.62 dx` at `h = 2 dx`):
+//!   the disc ramp is flat, so the push must start beyond the layer's target; it holds the
+//!   first layer of a uniform lattice at `dx/2` from a flat wall against its residual
+//!   `grad C`, where a push within `dx/2` lets the layer sink towards `0.43 dx`; see
 //!   [`default_push_radius`];
 //! * the shift capped at `0.25 dx` (eq 15);
 //! * stages: 2a moves only particles whose kernel is truncated (`gamma < 1`) until the total
@@ -49,8 +53,8 @@ pub struct PackParams {
     pub diffusion: f64,
     /// Largest shift per iteration, in `dx` (paper 4, eq 15: 0.25).
     pub max_shift: f64,
-    /// Radius of the boundary push, in `dx`; `None`: [`default_push_radius`] (`dx/2` in 2-D,
-    /// the balanced radius in 3-D).
+    /// Radius of the boundary push, in `dx`; `None`: [`default_push_radius`] (the relaxed
+    /// balance distance in 2-D, the balanced radius in 3-D).
     pub push_radius: Option<f64>,
     /// Most iterations of stage 2a.
     pub stage_a_max: usize,
@@ -662,21 +666,22 @@ impl<V: WallIntegrals> Packer<V> {
     }
 }
 
-/// The default radius of the boundary push, in units of `dx`: `1/2` (the particle radius, as
-/// the authors' code) in 2-D, where the chord ramp `2 sqrt(R^2 - d^2)` is steep enough that
-/// the settled first layer sits at `0.50 dx` (trapezoid, bunny, airfoil: 0.493-0.503 dx) and
-/// the balanced radius would change it by 1%; [`balanced_push_radius`] in 3-D, where the disc
-/// ramp `pi (R^2 - d^2)` is flat and `dx/2` lets the layer settle at 0.44 dx (sphere, dx =
-/// 0.05 m).
+/// The default radius of the boundary push, in units of `dx`: in 2-D the
+/// [`relaxed_balance_distance`] (`0.472 dx` at `h = 2 dx`), where eq 5 itself leaves a
+/// uniformly dense first layer unforced once the layers behind it have relaxed; the chord ramp
+/// `2 sqrt(R^2 - d^2)` is steep, so the push radius is where the first layer settles (flat walls
+/// near it with `|grad C|` near zero, sparse or convex walls a little inside). In 3-D
+/// [`balanced_push_radius`]: the disc ramp `pi (R^2 - d^2)` is flat, so a push that starts at
+/// the layer's target lets it sink well inside (sphere, dx = 0.05 m: 0.44 dx with `R = dx/2`);
+/// the balanced radius holds a uniform lattice's first layer at `dx/2`.
 ///
-/// Measured alternative in 2-D (issue 5): [`lattice_balance_distance`] (`0.437 dx` at
-/// `h = 2 dx`), a push only against compression beyond a uniform lattice's own balance point,
-/// lets flat-wall first layers settle where their relaxed `grad C` vanishes (0.473 dx) and
-/// lowers the trapezoid's mean `|grad C|` 7.9x instead of 1.7x, but the airfoil's inside (a
-/// convex solid block) then settles at 0.443 dx, outside the 10% band about `dx/2`.
+/// Measured in 2-D (issue 5): `R = dx/2` (the particle radius) holds every first layer at
+/// 0.50 dx against eq 5's midpoint residual, and the trapezoid's mean `|grad C|` falls only
+/// 1.67x (its flat walls keep 0.35-0.40 1/m at dx = 0.02 m); [`lattice_balance_distance`]
+/// (0.437 dx) lets the airfoil's inside sink to 0.443 dx, outside the 10% band.
 pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     if V::DIM == 2 {
-        0.5
+        relaxed_balance_distance::<V>(kernel, dx)
     } else {
         balanced_push_radius::<V>(kernel, dx)
     }
@@ -691,6 +696,20 @@ fn half_lattice_first_layer<V: WallIntegrals>(
     kernel: &Wendland,
     dx: f64,
     d: f64,
+) -> (Vec<V>, V, f64, f64) {
+    let m = (kernel.support / dx).ceil() as usize + 1;
+    let layers: Vec<f64> = (0..=m).map(|k| d + k as f64 * dx).collect();
+    half_lattice_layer(kernel, dx, &layers, 0)
+}
+
+/// As [`half_lattice_first_layer`] for a half lattice whose layers (each a uniform square row
+/// or sheet of spacing `dx`, aligned with the others) lie at the wall distances `layers`,
+/// evaluated at a particle of layer `i`.
+fn half_lattice_layer<V: WallIntegrals>(
+    kernel: &Wendland,
+    dx: f64,
+    layers: &[f64],
+    i: usize,
 ) -> (Vec<V>, V, f64, f64) {
     let last = V::DIM - 1;
     let support = kernel.support;
@@ -715,29 +734,78 @@ fn half_lattice_first_layer<V: WallIntegrals>(
     let mut normal = V::ZERO;
     normal.set(last, -1.0);
     let mut xa = V::ZERO;
-    xa.set(last, d);
+    xa.set(last, layers[i]);
     // sum_b V_b grad_a W_ab over the half lattice.
     let m = (support / dx).ceil() as i64 + 1;
     let volume = dx.powi(V::DIM as i32);
     let tangential = if V::DIM == 2 { 0..=0 } else { -m..=m };
     let mut sum = V::ZERO;
-    for i in -m..=m {
-        for j in tangential.clone() {
-            for k in 0..=m {
+    for &yk in layers {
+        if (yk - layers[i]).abs() >= support {
+            continue;
+        }
+        for a in -m..=m {
+            for b in tangential.clone() {
                 let mut xb = V::ZERO;
-                xb.set(0, i as f64 * dx);
+                xb.set(0, a as f64 * dx);
                 if V::DIM == 3 {
-                    xb.set(1, j as f64 * dx);
+                    xb.set(1, b as f64 * dx);
                 }
-                xb.set(last, d + k as f64 * dx);
+                xb.set(last, yk);
                 sum -= kernel.gradient(xb - xa) * volume;
             }
         }
     }
-    let (g, w) = V::element_gamma_and_integral(kernel, xa, &corners, normal);
-    let gamma = 1.0 + g;
+    let (gamma, w) = if layers[i] < support {
+        let (g, w) = V::element_gamma_and_integral(kernel, xa, &corners, normal);
+        (1.0 + g, w)
+    } else {
+        (1.0, 0.0)
+    };
     let gradc = (sum.get(last) - w) / gamma;
     (corners, xa, gamma, gradc)
+}
+
+/// The relaxed balance distance, in units of `dx`: where the first layer of a half lattice
+/// settles at a flat wall when the layers that step 2a moves (those the wall truncates,
+/// `(k + 1/2) dx < 2h`) are in equilibrium under paper 4's eq 12 (`grad C = 0`, eq 5) and the
+/// layers behind them stay at their lattice places `(k + 1/2) dx`. It is the discrete
+/// counterpart of paper 4's "a particle radius from the wall": the uniformly dense wall layer
+/// that eq 5 itself leaves unforced once the layers behind it have relaxed, so a push ramp
+/// starting there acts only against compression beyond it. `0.4720 dx` at `h = 2 dx` and
+/// `0.4822 dx` at `h = 1.5 dx` in 2-D: outside [`lattice_balance_distance`] (the first layer
+/// alone relaxed in front of a rigid lattice, 0.437 / 0.453), inside `dx/2`. Freeing more
+/// layers moves it out slowly (a uniform strain of the free layers costs no `grad C`: 0.4729
+/// with 6 free layers, 0.4746 with 30, at `h = 2 dx`). The free layers move by the shift of
+/// eq 12 (capped at 0.02 dx) until `|grad C| dx < 1e-11` on each (about 100 iterations).
+pub fn relaxed_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+    // The layers whose kernel the wall truncates, (k + 1/2) dx < support: those step 2a moves.
+    let truncated = (0..)
+        .take_while(|&k| (k as f64 + 0.5) * dx < kernel.support)
+        .count();
+    relaxed_layers::<V>(kernel, dx, truncated)
+}
+
+/// The first-layer distance of [`relaxed_balance_distance`] with `free` free layers.
+fn relaxed_layers<V: WallIntegrals>(kernel: &Wendland, dx: f64, free: usize) -> f64 {
+    let reach = (kernel.support / dx - 1e-9).ceil() as usize;
+    let mut layers: Vec<f64> = (0..free + reach + 2)
+        .map(|k| (k as f64 + 0.5) * dx)
+        .collect();
+    let d_coef = 0.5 * kernel.h * kernel.h;
+    let cap = 0.02 * dx;
+    for _ in 0..20_000 {
+        let g: Vec<f64> = (0..free)
+            .map(|i| half_lattice_layer::<V>(kernel, dx, &layers, i).3)
+            .collect();
+        if g.iter().all(|g| g.abs() * dx < 1e-11) {
+            break;
+        }
+        for (y, g) in layers.iter_mut().zip(&g) {
+            *y -= (d_coef * g).clamp(-cap, cap);
+        }
+    }
+    layers[0] / dx
 }
 
 /// The balance distance of a uniform lattice at a flat wall, in units of `dx`: the distance
@@ -917,6 +985,25 @@ mod tests {
                 got.push((d2, d3));
             }
             assert!((got[0].0 - got[1].0).abs() < 1e-9 && (got[0].1 - got[1].1).abs() < 1e-9);
+        }
+    }
+
+    /// The relaxed balance distance lies between the lattice balance distance and `dx/2` and
+    /// does not depend on `dx`; an independent Python model of the same layered problem
+    /// (Shepard factor by a 1-D rule) gives 0.4720 dx at h = 2 dx and 0.4822 dx at h = 1.5 dx.
+    #[test]
+    fn relaxed_balance_distance_values() {
+        for (hr, want) in [(2.0, 0.4720), (1.5, 0.4822)] {
+            let mut got = Vec::new();
+            for dx in [0.02, 0.05] {
+                let k2 = Wendland::new(hr * dx, 2);
+                let d = relaxed_balance_distance::<DVec2>(&k2, dx);
+                println!("h = {hr} dx, dx = {dx}: relaxed {d:.5} dx");
+                assert!((d - want).abs() < 2e-4, "{d}");
+                assert!(d > lattice_balance_distance::<DVec2>(&k2, dx) && d < 0.5);
+                got.push(d);
+            }
+            assert!((got[0] - got[1]).abs() < 1e-6);
         }
     }
 
