@@ -110,6 +110,9 @@ pub struct CellGrid<V: Vector> {
     row_dims: [usize; 3],
     /// `true` when `items[k] = k` (the points were reordered into the storage order).
     contiguous: bool,
+    /// Per cell (`cx + nx (cy + ny cz)`), `true` when it and its neighbour cells are empty
+    /// ([`CellGrid::no_candidates`]); empty on periodic grids.
+    empty_around: Vec<bool>,
 }
 
 impl<V: Vector> CellGrid<V> {
@@ -129,6 +132,7 @@ impl<V: Vector> CellGrid<V> {
             row_rank: vec![0],
             row_dims: [1; 3],
             contiguous: false,
+            empty_around: Vec::new(),
         }
     }
 
@@ -209,6 +213,7 @@ impl<V: Vector> CellGrid<V> {
             self.cell_start.clear();
             self.cell_start.extend([0, 0]);
             self.items.clear();
+            self.empty_around.clear();
             return;
         }
         let (mut lo, mut hi) = (points[0], points[0]);
@@ -259,6 +264,7 @@ impl<V: Vector> CellGrid<V> {
             self.cell_start[c] = self.cell_start[c - 1];
         }
         self.cell_start[0] = 0;
+        self.map_empty_neighbourhoods();
     }
 
     /// Estimated heap memory of the grid in bytes.
@@ -267,6 +273,7 @@ impl<V: Vector> CellGrid<V> {
             + self.items.capacity()
             + self.cell_of.capacity()
             + self.row_rank.capacity())
+            + self.empty_around.capacity()
     }
 
     #[inline(always)]
@@ -341,14 +348,25 @@ impl<V: Vector> CellGrid<V> {
     }
 
     /// `true` when the cells around `x` (those [`CellGrid::for_each_candidate`] visits) hold
-    /// no point: a cheap test that spares a walk through empty cells. Without periodic axes
-    /// only (it answers `false` on a periodic grid, so callers walk as before).
+    /// no point: a cheap test that spares a walk through empty cells (one look-up in the map
+    /// the last rebuild made, for `x` inside the grid). Without periodic axes only (it answers
+    /// `false` on a periodic grid, so callers walk as before).
     #[inline(always)]
     pub fn no_candidates(&self, x: V) -> bool {
         if self.periodic {
             return false;
         }
         let c = self.coords(x);
+        let [nx, ny, nz] = self.dims;
+        let inside = (0..3).all(|k| c[k] >= 0 && c[k] < self.dims[k] as i64);
+        if inside && self.empty_around.len() == nx * ny * nz {
+            return self.empty_around[c[0] as usize + nx * (c[1] as usize + ny * c[2] as usize)];
+        }
+        self.cells_empty_around(c)
+    }
+
+    /// `true` when the cells at most one away from cell `c` (clipped to the grid) are empty.
+    fn cells_empty_around(&self, c: [i64; 3]) -> bool {
         let mut lo = [0usize; 3];
         let mut hi = [0usize; 3];
         for k in 0..3 {
@@ -371,6 +389,25 @@ impl<V: Vector> CellGrid<V> {
             }
         }
         true
+    }
+
+    /// Maps, for [`CellGrid::no_candidates`], every cell to whether the cells around it are
+    /// empty (grids without periodic axes).
+    fn map_empty_neighbourhoods(&mut self) {
+        let mut empty = std::mem::take(&mut self.empty_around);
+        empty.clear();
+        if !self.periodic {
+            let [nx, ny, nz] = self.dims;
+            empty.reserve(nx * ny * nz);
+            for cz in 0..nz as i64 {
+                for cy in 0..ny as i64 {
+                    for cx in 0..nx as i64 {
+                        empty.push(self.cells_empty_around([cx, cy, cz]));
+                    }
+                }
+            }
+        }
+        self.empty_around = empty;
     }
 
     /// Calls `visit(j, shift)` for every point `j` in the cells around `x`, where
@@ -914,6 +951,10 @@ mod tests {
             grid.for_each_neighbour(x, &wall, radius, |j, d, l| walk.push((j, d, l)));
             grid.for_each_sparse_neighbour(x, &wall, radius, |j, d, l| sparse.push((j, d, l)));
             assert_eq!(walk, sparse, "query at {x:?}");
+            // The map of empty neighbourhoods answers as the cells do, in and out of the grid.
+            let mut candidates = 0;
+            grid.for_each_candidate(x, |_| candidates += 1);
+            assert_eq!(grid.no_candidates(x), candidates == 0, "query at {x:?}");
             if walk.is_empty() {
                 empty += 1;
             } else {
