@@ -108,6 +108,16 @@ pub struct BenchArgs {
     /// `time.neighbour_skin`, the same default; 0 = search the cell grid at every step).
     #[arg(long, default_value_t = bisph_io::case::DEFAULT_NEIGHBOUR_SKIN)]
     neighbour_skin: f64,
+    /// Runs of each configuration, interleaved (every configuration once, then again), so
+    /// that a slow spell of a shared machine spreads over all of them; above one, a summary
+    /// gives each configuration's median, lowest and highest pairs/s and the speed-up over
+    /// the fewest threads, paired run by run.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    repeat: u32,
+    /// Pair interactions per second of another code on this machine (e.g. 55e6 for the
+    /// DualSPHysics figure of the issue): the summary gives the ratio of the medians to it.
+    #[arg(long, value_name = "PAIRS_PER_SECOND")]
+    reference: Option<f64>,
     /// Also write the results as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -231,7 +241,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         "integ%",
         "B/part"
     );
-    let mut results = Vec::new();
+    let mut configs = Vec::new();
     for &(case, dim, particles) in &sizes {
         let budget = if dim == 2 { 8.0e6 } else { 2.0e6 };
         let steps = args
@@ -239,7 +249,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
             .unwrap_or(((budget / particles.max(1) as f64) as u64).clamp(3, 100));
         for &h_over_dx in h_list.iter() {
             for &threads in &args.threads {
-                let config = Config {
+                configs.push(Config {
                     case,
                     dim,
                     particles,
@@ -247,33 +257,137 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                     threads,
                     steps,
                     skin: args.neighbour_skin,
-                };
-                let output = Command::new(&exe)
-                    .args(["bench", "--single", &config.encode()])
-                    .output()
-                    .map_err(|e| (1, format!("cannot start a benchmark process: {e}")))?;
-                if !output.status.success() {
-                    return Err((
-                        3,
-                        format!(
-                            "benchmark {config:?} failed: {}",
-                            String::from_utf8_lossy(&output.stderr).trim()
-                        ),
-                    ));
-                }
-                let row: Value = serde_json::from_slice(&output.stdout)
-                    .map_err(|e| (1, format!("benchmark {config:?}: unreadable result: {e}")))?;
-                print_row(&row);
-                results.push(row);
+                });
             }
         }
     }
+    let mut results = Vec::new();
+    for _ in 0..args.repeat {
+        for config in &configs {
+            let row = run_child(&exe, config)?;
+            print_row(&row);
+            results.push(row);
+        }
+    }
+    let mut summary = Vec::new();
+    if args.repeat > 1 {
+        summary = summarise(&configs, &results, args.reference);
+    }
     if let Some(path) = args.json {
-        let text = serde_json::to_string_pretty(&results).unwrap_or_default();
+        let document = if summary.is_empty() {
+            Value::Array(results)
+        } else {
+            json!({ "runs": results, "summary": summary })
+        };
+        let text = serde_json::to_string_pretty(&document).unwrap_or_default();
         std::fs::write(&path, text)
             .map_err(|e| (1, format!("cannot write {}: {e}", path.display())))?;
     }
     Ok(())
+}
+
+/// Runs one configuration in a child process and reads its JSON row.
+fn run_child(exe: &std::path::Path, config: &Config) -> Result<Value, (u8, String)> {
+    let output = Command::new(exe)
+        .args(["bench", "--single", &config.encode()])
+        .output()
+        .map_err(|e| (1, format!("cannot start a benchmark process: {e}")))?;
+    if !output.status.success() {
+        return Err((
+            3,
+            format!(
+                "benchmark {config:?} failed: {}",
+                String::from_utf8_lossy(&output.stderr).trim()
+            ),
+        ));
+    }
+    serde_json::from_slice(&output.stdout)
+        .map_err(|e| (1, format!("benchmark {config:?}: unreadable result: {e}")))
+}
+
+/// Per configuration over the repeated runs (`results` holds the runs in the order of
+/// `configs`, repeat after repeat): median, lowest and highest pairs/s, the median's ratio to
+/// `reference`, and the speed-up over the same case with the fewest threads, taken run by run
+/// (the two configurations of one repeat ran next to each other) and summarised the same way.
+/// Printed as a table; returned as JSON rows.
+fn summarise(configs: &[Config], results: &[Value], reference: Option<f64>) -> Vec<Value> {
+    let pairs = |row: &Value| {
+        row["pair_interactions_per_second"]
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    };
+    let runs_of = |k: usize| results.iter().skip(k).step_by(configs.len());
+    let spread = |mut values: Vec<f64>| {
+        let median = median_of(&mut values);
+        (median, values[0], values[values.len() - 1])
+    };
+    println!(
+        "\nover {} runs each: {:>9} {:>3} {:>6} {:>7} {:>14} {:>12} {:>12} {:>8} {:>22}",
+        results.len() / configs.len().max(1),
+        "particles",
+        "dim",
+        "h/dx",
+        "threads",
+        "median pairs/s",
+        "lowest",
+        "highest",
+        "ratio",
+        "speed-up (med lo hi)"
+    );
+    let mut rows = Vec::new();
+    for (k, config) in configs.iter().enumerate() {
+        let (median, lowest, highest) = spread(runs_of(k).map(pairs).collect());
+        let ratio = reference.map(|r| median / r);
+        // The same case with the fewest threads.
+        let base = configs
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| {
+                c.case == config.case
+                    && c.dim == config.dim
+                    && c.particles == config.particles
+                    && c.h_over_dx == config.h_over_dx
+            })
+            .min_by_key(|(_, c)| c.threads)
+            .map(|(b, _)| b)
+            .unwrap_or(k);
+        let speed_up = (base != k).then(|| {
+            spread(
+                runs_of(k)
+                    .zip(runs_of(base))
+                    .map(|(run, one)| pairs(run) / pairs(one))
+                    .collect(),
+            )
+        });
+        println!(
+            "{:>29} {:>3} {:>6.3} {:>7} {:>14.3e} {:>12.3e} {:>12.3e} {:>8} {:>22}",
+            config.particles,
+            config.dim,
+            config.h_over_dx,
+            config.threads,
+            median,
+            lowest,
+            highest,
+            ratio.map_or("-".into(), |r| format!("{r:.2}")),
+            speed_up.map_or("-".into(), |(m, lo, hi)| format!("{m:.2} {lo:.2} {hi:.2}")),
+        );
+        rows.push(json!({
+            "case": config.case.name(),
+            "dim": config.dim,
+            "particles": config.particles,
+            "h_over_dx": config.h_over_dx,
+            "threads": config.threads,
+            "runs": runs_of(k).count(),
+            "pairs_per_second_median": median,
+            "pairs_per_second_lowest": lowest,
+            "pairs_per_second_highest": highest,
+            "ratio_to_reference": ratio,
+            "speed_up_median": speed_up.map(|s| s.0),
+            "speed_up_lowest": speed_up.map(|s| s.1),
+            "speed_up_highest": speed_up.map(|s| s.2),
+        }));
+    }
+    rows
 }
 
 fn print_row(row: &Value) {

@@ -698,3 +698,56 @@ fn pack_errors_name_the_key() {
         assert!(!err.contains("panicked"), "case {k}: {err}");
     }
 }
+
+/// `bench --repeat` runs every configuration that many times and summarises them: each
+/// median lies between its lowest and highest run, the ratio is the median over the
+/// reference, and the speed-up over one thread is given for the two-thread rows only.
+#[test]
+fn bench_repeat_summarises_the_runs() {
+    let dir = temp_dir("bench-repeat");
+    let json = dir.join("bench.json");
+    let out = bisph(&[
+        "bench",
+        "--particles",
+        "1000",
+        "--h-over-dx",
+        "1.415",
+        "--threads",
+        "1,2",
+        "--steps",
+        "3",
+        "--repeat",
+        "3",
+        "--reference",
+        "1e6",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let runs = doc["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 6);
+    // Interleaved: 1 thread, 2 threads, 1 thread, ...
+    let threads: Vec<f64> = runs
+        .iter()
+        .map(|r| r["threads"].as_f64().unwrap())
+        .collect();
+    assert_eq!(threads, [1.0, 2.0, 1.0, 2.0, 1.0, 2.0]);
+    let summary = doc["summary"].as_array().unwrap();
+    assert_eq!(summary.len(), 2);
+    for row in summary {
+        let f = |key: &str| row[key].as_f64().unwrap();
+        assert_eq!(row["runs"], 3);
+        assert!(f("pairs_per_second_lowest") <= f("pairs_per_second_median"));
+        assert!(f("pairs_per_second_median") <= f("pairs_per_second_highest"));
+        assert!((f("ratio_to_reference") - f("pairs_per_second_median") / 1e6).abs() < 1e-9);
+    }
+    assert!(summary[0]["speed_up_median"].is_null());
+    let speed_up = summary[1]["speed_up_median"].as_f64().unwrap();
+    assert!(speed_up > 0.0 && speed_up.is_finite(), "{speed_up}");
+}
