@@ -522,13 +522,8 @@ impl<V: Vector> CellGrid<V> {
     }
 
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
-    /// periodic axes) for every point with `|r_ij| < radius`, in storage order.
-    ///
-    /// The candidates of each run of cells are filtered in blocks without a branch per
-    /// candidate: every candidate's index and `r^2` are written to a small buffer whose fill
-    /// count grows by one only for points inside the radius, then `visit` runs over the kept
-    /// ones. With reordered points ([`CellGrid::mark_reordered`]) the candidates are read as a
-    /// contiguous slice of `points`.
+    /// periodic axes) for every point with `|r_ij| < radius`, in storage order
+    /// ([`CellGrid::for_each_neighbour_run`], one at a time).
     #[inline(always)]
     pub fn for_each_neighbour(
         &self,
@@ -537,39 +532,92 @@ impl<V: Vector> CellGrid<V> {
         radius: f64,
         mut visit: impl FnMut(usize, V, f64),
     ) {
-        const BLOCK: usize = 32;
+        self.for_each_neighbour_run(x, points, radius, |index, offset, r2| {
+            for ((&j, &r_ij), &r2) in index.iter().zip(offset).zip(r2) {
+                visit(j as usize, r_ij, r2.sqrt());
+            }
+        });
+    }
+
+    /// Calls `visit(index, r_ij, r2)` with runs of the points within `radius` of `x`, in
+    /// storage order: `index[k]` is a point `j`, `r_ij[k] = points[j] - x` (the minimum image
+    /// across periodic axes) and `r2[k] = |r_ij[k]|^2`.
+    ///
+    /// The candidates of each run of cells are filtered in blocks without a branch per
+    /// candidate: every candidate's index, offset and `r^2` are written to small buffers whose
+    /// fill count grows by one only for points inside the radius, then `visit` gets the kept
+    /// ones. With reordered points ([`CellGrid::mark_reordered`]) the candidates are read as a
+    /// contiguous slice of `points`.
+    #[inline(always)]
+    pub fn for_each_neighbour_run(
+        &self,
+        x: V,
+        points: &[V],
+        radius: f64,
+        mut visit: impl FnMut(&[u32], &[V], &[f64]),
+    ) {
         let r2max = radius * radius;
-        let mut kept = [0u32; BLOCK];
-        let mut kept_r2 = [0.0f64; BLOCK];
+        let mut kept = KeptBlock::<V>::new();
         self.for_each_run(x, 1, |start, end, shift| {
             // The image of `x` seen from the run's points (exactly `x` without periodicity).
             let origin = x - shift;
             let mut s = start;
             while s < end {
-                let e = end.min(s + BLOCK);
-                let mut n = 0usize;
-                if self.contiguous {
-                    for (j, &p) in (s..e).zip(&points[s..e]) {
-                        let r2 = (p - origin).length_squared();
-                        kept[n % BLOCK] = j as u32;
-                        kept_r2[n % BLOCK] = r2;
-                        n += usize::from(r2 < r2max);
-                    }
+                let e = end.min(s + KEPT_BLOCK);
+                let n = if self.contiguous {
+                    kept.filter(
+                        (s..e)
+                            .zip(&points[s..e])
+                            .map(|(j, &p)| (j as u32, p - origin)),
+                        r2max,
+                    )
                 } else {
-                    for &j in &self.items[s..e] {
-                        let r2 = (points[j as usize] - origin).length_squared();
-                        kept[n % BLOCK] = j;
-                        kept_r2[n % BLOCK] = r2;
-                        n += usize::from(r2 < r2max);
-                    }
-                }
-                for (&j, &r2) in kept[..n].iter().zip(&kept_r2[..n]) {
-                    let j = j as usize;
-                    visit(j, points[j] - origin, r2.sqrt());
-                }
+                    kept.filter(
+                        self.items[s..e]
+                            .iter()
+                            .map(|&j| (j, points[j as usize] - origin)),
+                        r2max,
+                    )
+                };
+                visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
                 s = e;
             }
         });
+    }
+}
+
+/// Candidates filtered per block.
+const KEPT_BLOCK: usize = 32;
+
+/// The buffers of the branch-free block filter of the neighbour searches.
+struct KeptBlock<V> {
+    index: [u32; KEPT_BLOCK],
+    offset: [V; KEPT_BLOCK],
+    r2: [f64; KEPT_BLOCK],
+}
+
+impl<V: Vector> KeptBlock<V> {
+    fn new() -> Self {
+        KeptBlock {
+            index: [0; KEPT_BLOCK],
+            offset: [V::ZERO; KEPT_BLOCK],
+            r2: [0.0; KEPT_BLOCK],
+        }
+    }
+
+    /// Keeps, in order, the candidates `(j, r_ij)` (at most [`KEPT_BLOCK`]) with
+    /// `|r_ij|^2 < r2max`; returns how many.
+    #[inline(always)]
+    fn filter(&mut self, candidates: impl Iterator<Item = (u32, V)>, r2max: f64) -> usize {
+        let mut n = 0usize;
+        for (j, d) in candidates {
+            let r2 = d.length_squared();
+            self.index[n % KEPT_BLOCK] = j;
+            self.offset[n % KEPT_BLOCK] = d;
+            self.r2[n % KEPT_BLOCK] = r2;
+            n += usize::from(r2 < r2max);
+        }
+        n
     }
 }
 
@@ -638,15 +686,21 @@ impl<V: Vector> PairList<V> {
             });
     }
 
+    /// The listed neighbours of query `i`, their offsets `r_ij` and factors, in the order of
+    /// [`CellGrid::for_each_neighbour`].
+    #[inline(always)]
+    pub fn neighbours(&self, i: usize) -> (&[u32], &[V], &[f64]) {
+        let block = &self.blocks[i / Self::BLOCK];
+        let k = i % Self::BLOCK;
+        let (s, e) = (block.start[k] as usize, block.start[k + 1] as usize);
+        (&block.index[s..e], &block.offset[s..e], &block.factor[s..e])
+    }
+
     /// Calls `visit(j, r_ij, factor)` for every listed neighbour of query `i`, in the order of
     /// [`CellGrid::for_each_neighbour`].
     #[inline(always)]
     pub fn for_each(&self, i: usize, mut visit: impl FnMut(usize, V, f64)) {
-        let block = &self.blocks[i / Self::BLOCK];
-        let k = i % Self::BLOCK;
-        let (s, e) = (block.start[k] as usize, block.start[k + 1] as usize);
-        let (index, offset, factor) =
-            (&block.index[s..e], &block.offset[s..e], &block.factor[s..e]);
+        let (index, offset, factor) = self.neighbours(i);
         for ((&j, &r_ij), &f) in index.iter().zip(offset).zip(factor) {
             visit(j as usize, r_ij, f);
         }
@@ -788,8 +842,7 @@ impl<V: Vector> CandidateList<V> {
 
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
     /// periodic axes) for every candidate of point `i` with `|r_ij| < radius`, in the list's
-    /// order; `x` is `points[i]`. The same branch-free block filter as
-    /// [`CellGrid::for_each_neighbour`].
+    /// order; `x` is `points[i]` ([`CandidateList::for_each_neighbour_run`], one at a time).
     #[inline(always)]
     pub fn for_each_neighbour(
         &self,
@@ -799,44 +852,43 @@ impl<V: Vector> CandidateList<V> {
         radius: f64,
         mut visit: impl FnMut(usize, V, f64),
     ) {
-        const BLOCK: usize = 32;
+        self.for_each_neighbour_run(i, x, points, radius, |index, offset, r2| {
+            for ((&j, &r_ij), &r2) in index.iter().zip(offset).zip(r2) {
+                visit(j as usize, r_ij, r2.sqrt());
+            }
+        });
+    }
+
+    /// Calls `visit(index, r_ij, r2)` with runs of the candidates of point `i` within
+    /// `radius`, in the list's order, as [`CellGrid::for_each_neighbour_run`] does; `x` is
+    /// `points[i]`.
+    #[inline(always)]
+    pub fn for_each_neighbour_run(
+        &self,
+        i: usize,
+        x: V,
+        points: &[V],
+        radius: f64,
+        mut visit: impl FnMut(&[u32], &[V], &[f64]),
+    ) {
         let r2max = radius * radius;
         let block = &self.blocks[i / Self::BLOCK];
         let k = i % Self::BLOCK;
         let (s, e) = (block.start[k] as usize, block.start[k + 1] as usize);
-        let mut kept = [0u32; BLOCK];
-        let mut kept_r2 = [0.0f64; BLOCK];
+        let mut kept = KeptBlock::<V>::new();
         let period = self.period;
-        let periodic = period.any();
-        for chunk in block.index[s..e].chunks(BLOCK) {
-            let mut n = 0usize;
-            if periodic {
-                for &j in chunk {
-                    let r2 = period
-                        .minimum_image(points[j as usize] - x)
-                        .length_squared();
-                    kept[n % BLOCK] = j;
-                    kept_r2[n % BLOCK] = r2;
-                    n += usize::from(r2 < r2max);
-                }
+        for chunk in block.index[s..e].chunks(KEPT_BLOCK) {
+            let n = if period.any() {
+                kept.filter(
+                    chunk
+                        .iter()
+                        .map(|&j| (j, period.minimum_image(points[j as usize] - x))),
+                    r2max,
+                )
             } else {
-                for &j in chunk {
-                    let r2 = (points[j as usize] - x).length_squared();
-                    kept[n % BLOCK] = j;
-                    kept_r2[n % BLOCK] = r2;
-                    n += usize::from(r2 < r2max);
-                }
-            }
-            for (&j, &r2) in kept[..n].iter().zip(&kept_r2[..n]) {
-                let j = j as usize;
-                let r_ij = points[j] - x;
-                let r_ij = if periodic {
-                    period.minimum_image(r_ij)
-                } else {
-                    r_ij
-                };
-                visit(j, r_ij, r2.sqrt());
-            }
+                kept.filter(chunk.iter().map(|&j| (j, points[j as usize] - x)), r2max)
+            };
+            visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
         }
     }
 }

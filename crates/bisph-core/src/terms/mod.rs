@@ -246,6 +246,31 @@ impl<V: Vector> PairInputs<'_, V> {
             sums.shepard += self.model.kernel.value(r) * volume_j;
         }
     }
+
+    /// Adds a run of neighbours `index[k]` with offsets `r_ij[k]`, `(|r_ij|, F) = r_f(k)`, to
+    /// the sums of `i`. The run is summed into a copy of the sums (held in registers, not in
+    /// memory) that replaces them at its end: the pair order and so the bits are those of one
+    /// running sum.
+    #[inline(always)]
+    fn add_run<
+        const WEIGHTED: bool,
+        const DIFFUSE: bool,
+        const VISCID: bool,
+        const SHEPARD: bool,
+    >(
+        &self,
+        sums: &mut FluidSums<V>,
+        index: &[u32],
+        r_ij: &[V],
+        r_f: impl Fn(usize) -> (f64, f64),
+    ) {
+        let mut run = *sums;
+        for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
+            let (r, f) = r_f(k);
+            self.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut run, j as usize, r_ij, r, f);
+        }
+        *sums = run;
+    }
 }
 
 /// [`fluid_sums`] with its switches `[weighted, diffuse, viscid, shepard]` turned into
@@ -320,31 +345,28 @@ fn fluid_sums<
     };
     match neighbours {
         FluidNeighbours::Grid(grid) => {
-            grid.for_each_neighbour(x_i, position, kernel.support, |j, r_ij, r| {
-                pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                    &mut sums,
-                    j,
-                    r_ij,
-                    r,
-                    kernel.gradient_factor(r),
-                )
+            grid.for_each_neighbour_run(x_i, position, kernel.support, |index, r_ij, r2| {
+                pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
+                    let r = r2[k].sqrt();
+                    (r, kernel.gradient_factor(r))
+                })
             })
         }
         FluidNeighbours::Candidates(list) => {
-            list.for_each_neighbour(i, x_i, position, kernel.support, |j, r_ij, r| {
-                pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                    &mut sums,
-                    j,
-                    r_ij,
-                    r,
-                    kernel.gradient_factor(r),
-                )
+            list.for_each_neighbour_run(i, x_i, position, kernel.support, |index, r_ij, r2| {
+                pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
+                    let r = r2[k].sqrt();
+                    (r, kernel.gradient_factor(r))
+                })
             })
         }
         // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
-        FluidNeighbours::List(list) => list.for_each(i, |j, r_ij, f| {
-            pair.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, j, r_ij, r_ij.length(), f)
-        }),
+        FluidNeighbours::List(list) => {
+            let (index, r_ij, factor) = list.neighbours(i);
+            pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
+                (r_ij[k].length(), factor[k])
+            })
+        }
     }
     sums
 }
