@@ -530,13 +530,9 @@ impl<V: Vector> CellGrid<V> {
         x: V,
         points: &[V],
         radius: f64,
-        mut visit: impl FnMut(usize, V, f64),
+        visit: impl FnMut(usize, V, f64),
     ) {
-        self.for_each_neighbour_run(x, points, radius, |index, offset, r2| {
-            for ((&j, &r_ij), &r2) in index.iter().zip(offset).zip(r2) {
-                visit(j as usize, r_ij, r2.sqrt());
-            }
-        });
+        self.for_each_neighbour_run(x, points, radius, one_at_a_time(visit));
     }
 
     /// Calls `visit(index, r_ij, r2)` with runs of the points within `radius` of `x`, in
@@ -583,6 +579,19 @@ impl<V: Vector> CellGrid<V> {
                 s = e;
             }
         });
+    }
+}
+
+/// The run visitor of the `for_each_neighbour_run` searches that calls `visit(j, r_ij,
+/// |r_ij|)` for each neighbour of the run in turn.
+#[inline(always)]
+fn one_at_a_time<V: Copy>(
+    mut visit: impl FnMut(usize, V, f64),
+) -> impl FnMut(&[u32], &[V], &[f64]) {
+    move |index, offset, r2| {
+        for ((&j, &r_ij), &r2) in index.iter().zip(offset).zip(r2) {
+            visit(j as usize, r_ij, r2.sqrt());
+        }
     }
 }
 
@@ -850,13 +859,9 @@ impl<V: Vector> CandidateList<V> {
         x: V,
         points: &[V],
         radius: f64,
-        mut visit: impl FnMut(usize, V, f64),
+        visit: impl FnMut(usize, V, f64),
     ) {
-        self.for_each_neighbour_run(i, x, points, radius, |index, offset, r2| {
-            for ((&j, &r_ij), &r2) in index.iter().zip(offset).zip(r2) {
-                visit(j as usize, r_ij, r2.sqrt());
-            }
-        });
+        self.for_each_neighbour_run(i, x, points, radius, one_at_a_time(visit));
     }
 
     /// Calls `visit(index, r_ij, r2)` with runs of the candidates of point `i` within
