@@ -426,20 +426,18 @@ impl<V: Vector> Simulation<V> {
     /// `u + tau a`, `rho + tau rhodot` from the stored state and rates.
     pub(crate) fn stage_state(&mut self, tau: f64) {
         let (f, s) = (&self.fluid, &mut self.scratch);
-        s.velocity.clear();
-        s.velocity.extend(
-            f.velocity
-                .iter()
-                .zip(&f.acceleration)
-                .map(|(&u, &a)| u + a * tau),
-        );
-        s.density.clear();
-        s.density.extend(
-            f.density
-                .iter()
-                .zip(&f.density_rate)
-                .map(|(&rho, &d)| rho + d * tau),
-        );
+        s.velocity.resize(f.len(), V::ZERO);
+        s.velocity
+            .par_iter_mut()
+            .zip(f.velocity.par_iter().zip(f.acceleration.par_iter()))
+            .with_min_len(4096)
+            .for_each(|(staged, (&u, &a))| *staged = u + a * tau);
+        s.density.resize(f.len(), 0.0);
+        s.density
+            .par_iter_mut()
+            .zip(f.density.par_iter().zip(f.density_rate.par_iter()))
+            .with_min_len(4096)
+            .for_each(|(staged, (&rho, &d))| *staged = rho + d * tau);
     }
 
     /// Sets every particle's gamma to the geometric Shepard factor (paper 2) and its
