@@ -348,7 +348,7 @@ fn fluid_sums<
             grid.for_each_neighbour_run(x_i, position, kernel.support, |index, r_ij, r2| {
                 pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
                     let r = r2[k].sqrt();
-                    (r, kernel.gradient_factor(r))
+                    (r, kernel.gradient_factor_within(r))
                 })
             })
         }
@@ -356,7 +356,7 @@ fn fluid_sums<
             list.for_each_neighbour_run(i, x_i, position, kernel.support, |index, r_ij, r2| {
                 pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
                     let r = r2[k].sqrt();
-                    (r, kernel.gradient_factor(r))
+                    (r, kernel.gradient_factor_within(r))
                 })
             })
         }
