@@ -357,9 +357,10 @@ impl<V: Vector> CellGrid<V> {
             return false;
         }
         let c = self.coords(x);
-        let [nx, ny, nz] = self.dims;
+        let [nx, ny, _] = self.dims;
         let inside = (0..3).all(|k| c[k] >= 0 && c[k] < self.dims[k] as i64);
-        if inside && self.empty_around.len() == nx * ny * nz {
+        // The map is empty (before the first rebuild) or covers every cell.
+        if inside && !self.empty_around.is_empty() {
             return self.empty_around[c[0] as usize + nx * (c[1] as usize + ny * c[2] as usize)];
         }
         self.cells_empty_around(c)

@@ -269,10 +269,11 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
             results.push(row);
         }
     }
-    let mut summary = Vec::new();
-    if args.repeat > 1 {
-        summary = summarise(&configs, &results, args.reference);
-    }
+    let summary = if args.repeat > 1 {
+        summarise(&configs, &results, args.reference)
+    } else {
+        Vec::new()
+    };
     if let Some(path) = args.json {
         let document = if summary.is_empty() {
             Value::Array(results)

@@ -343,6 +343,8 @@ fn fluid_sums<
         rho_i,
         p_i,
     };
+    // The two searched arms are written out: one closure shared by reference is not inlined
+    // into the searches (callgrind, 20k dam break: +8% instructions).
     match neighbours {
         FluidNeighbours::Grid(grid) => {
             grid.for_each_neighbour_run(x_i, position, kernel.support, |index, r_ij, r2| {
