@@ -15,7 +15,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CandidateList, CellGrid, PairList};
+use crate::neighbours::{CandidateList, CellGrid, KeptBlock, PairList};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -81,7 +81,6 @@ pub struct RateModel<V: Vector> {
 }
 
 /// Operators of particle `i` at the state `fluid`.
-#[inline(always)]
 pub fn particle_operators<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
@@ -89,6 +88,21 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
+    i: usize,
+) -> Operators<V> {
+    let mut kept = KeptBlock::new();
+    let walls = (wall_model, elements, wall_grid);
+    operators_with(model, walls, fluid, neighbours, &mut kept, i)
+}
+
+/// [`particle_operators`] with the neighbour filter's buffers `kept` of the calling task.
+#[inline(always)]
+fn operators_with<V: Vector, W: WallModel<V>>(
+    model: &RateModel<V>,
+    (wall_model, elements, wall_grid): (&W, &BoundaryElements<V>, &CellGrid<V>),
+    fluid: &FluidState<V>,
+    neighbours: FluidNeighbours<'_, V>,
+    kept: &mut KeptBlock<V>,
     i: usize,
 ) -> Operators<V> {
     let kernel = &model.kernel;
@@ -105,6 +119,7 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
         model,
         fluid,
         neighbours,
+        kept,
         i,
         [
             model.density_power != 0,
@@ -280,13 +295,14 @@ fn fluid_sums_dispatch<V: Vector>(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
     neighbours: FluidNeighbours<'_, V>,
+    kept: &mut KeptBlock<V>,
     i: usize,
     switches: [bool; 4],
 ) -> FluidSums<V> {
     macro_rules! pick {
         ($($w:literal $d:literal $v:literal $s:literal),*) => {
             match switches {
-                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, neighbours, i),)*
+                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, neighbours, kept, i),)*
             }
         };
     }
@@ -313,6 +329,7 @@ fn fluid_sums<
     model: &RateModel<V>,
     fluid: &FluidState<V>,
     neighbours: FluidNeighbours<'_, V>,
+    kept: &mut KeptBlock<V>,
     i: usize,
 ) -> FluidSums<V> {
     let kernel = &model.kernel;
@@ -347,21 +364,26 @@ fn fluid_sums<
     // into the searches (callgrind, 20k dam break: +8% instructions).
     match neighbours {
         FluidNeighbours::Grid(grid) => {
-            grid.for_each_neighbour_run(x_i, position, kernel.support, |index, r_ij, r2| {
+            grid.for_each_neighbour_run(x_i, position, kernel.support, kept, |index, r_ij, r2| {
                 pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
                     let r = r2[k].sqrt();
                     (r, kernel.gradient_factor_within(r))
                 })
             })
         }
-        FluidNeighbours::Candidates(list) => {
-            list.for_each_neighbour_run(i, x_i, position, kernel.support, |index, r_ij, r2| {
+        FluidNeighbours::Candidates(list) => list.for_each_neighbour_run(
+            i,
+            x_i,
+            position,
+            kernel.support,
+            kept,
+            |index, r_ij, r2| {
                 pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
                     let r = r2[k].sqrt();
                     (r, kernel.gradient_factor_within(r))
                 })
-            })
-        }
+            },
+        ),
         // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
         FluidNeighbours::List(list) => {
             let (index, r_ij, factor) = list.neighbours(i);
@@ -398,9 +420,9 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         )
         .enumerate()
         .with_min_len(256)
-        .for_each(|(i, (a, (drho, dissipation)))| {
-            let op =
-                particle_operators(model, wall_model, fluid, neighbours, elements, wall_grid, i);
+        .for_each_init(KeptBlock::new, |kept, (i, (a, (drho, dissipation)))| {
+            let walls = (wall_model, elements, wall_grid);
+            let op = operators_with(model, walls, fluid, neighbours, kept, i);
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;
