@@ -1973,3 +1973,20 @@ fn check_pack(loaded: &LoadedCase) -> Result<(), CaseError> {
 pub fn default_out_dir(case: &Case) -> PathBuf {
     PathBuf::from("out").join(&case.name)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `fill = "usaw"` relaxes for usaw walls only: elsewhere a named error.
+    #[test]
+    fn usaw_fill_needs_usaw_walls() {
+        let text = include_str!("../../../cases/usaw-tank-corner.toml");
+        assert!(parse_case("tank", text, &[]).is_ok());
+        let err = parse_case("tank", text, &["boundary=\"bi\"".to_string()])
+            .err()
+            .expect("fill = \"usaw\" with bi walls must be refused")
+            .to_string();
+        assert!(err.contains("fluid_block[0].fill"), "{err}");
+    }
+}
