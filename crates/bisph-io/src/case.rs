@@ -1983,10 +1983,10 @@ mod tests {
     fn usaw_fill_needs_usaw_walls() {
         let text = include_str!("../../../cases/usaw-tank-corner.toml");
         assert!(parse_case("tank", text, &[]).is_ok());
-        let err = parse_case("tank", text, &["boundary=\"bi\"".to_string()])
-            .err()
-            .expect("fill = \"usaw\" with bi walls must be refused")
-            .to_string();
+        let Err(err) = parse_case("tank", text, &["boundary=\"bi\"".to_string()]) else {
+            panic!("fill = \"usaw\" with bi walls must be refused");
+        };
+        let err = err.to_string();
         assert!(err.contains("fluid_block[0].fill"), "{err}");
     }
 }
