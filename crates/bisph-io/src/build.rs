@@ -175,6 +175,74 @@ pub fn block_points<V: CaseDim>(
     Ok(V::block_region(loaded, &key, block, dx, element_size)?.lattice)
 }
 
+/// `fill = "usaw"`: a start that fits usaw walls. Relaxes a block's lattice `points` in two
+/// stages ([`bisph_core::walls::usaw`]): [`relax_positions`](bisph_core::walls::usaw::relax_positions)
+/// zeroes the operators' zero-order residual (a constant pressure exerts no force; the free
+/// surface at height `surface` is a mirror), then, under gravity,
+/// [`balance_positions`](bisph_core::walls::usaw::balance_positions) zeroes the acceleration
+/// at hydrostatic rest (every pressure the still water's at its height, the equation of
+/// state's `dp/dd = rho(p) g`). At most [`USAW_FILL_ITERATIONS`] iterations each. The vertex
+/// particles are those of all walls at `rho0`; other blocks are not seen.
+fn relax_for_usaw<V: Vector>(
+    kernel: &Wendland,
+    dx: f64,
+    points: &mut [V],
+    elements: &BoundaryElements<V>,
+    gravity: V,
+    surface: f64,
+    eos: &Eos,
+) {
+    let Some(vertices) = bisph_core::walls::usaw::Vertices::from_elements(
+        elements,
+        eos.rho0(),
+        kernel.support,
+        dx,
+        bisph_core::neighbours::Periodicity::none(),
+    ) else {
+        return;
+    };
+    let g = gravity.length();
+    let up = if g > 0.0 {
+        gravity * (-1.0 / g)
+    } else {
+        V::ZERO
+    };
+    let volume = dx.powi(V::DIM as i32);
+    let mirror = if g > 0.0 { surface } else { f64::INFINITY };
+    bisph_core::walls::usaw::relax_positions(
+        kernel,
+        dx,
+        points,
+        volume,
+        &vertices,
+        elements,
+        up,
+        mirror,
+        USAW_FILL_ITERATIONS,
+    );
+    if g > 0.0 {
+        let pressure = |d: f64| eos.hydrostatic_pressure(g, d);
+        let density = |p: f64| eos.density(p).unwrap_or(eos.rho0());
+        bisph_core::walls::usaw::balance_positions(
+            kernel,
+            dx,
+            points,
+            volume,
+            &vertices,
+            elements,
+            up,
+            surface,
+            g,
+            &pressure,
+            &density,
+            USAW_FILL_ITERATIONS,
+        );
+    }
+}
+
+/// Most iterations of each stage of `fill = "usaw"`.
+pub const USAW_FILL_ITERATIONS: usize = 5000;
+
 /// Builds the simulation of a checked case.
 pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, CaseError> {
     let case = &loaded.case;
@@ -358,6 +426,18 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                     + 0.5 * block_dx
             }
         });
+        let mut points = points;
+        if block.fill.as_deref() == Some("usaw") {
+            relax_for_usaw(
+                &kernel,
+                block_dx,
+                &mut points,
+                &elements,
+                gravity,
+                surface,
+                &eos,
+            );
+        }
         let hydrostatic = match &block.pressure {
             None => g > 0.0,
             Some(InitialPressure::Named(_)) => true,

@@ -541,7 +541,10 @@ pub struct FluidBlock {
     /// Regions cut out of the block (e.g. an airfoil in a box).
     #[serde(default)]
     pub hole: Vec<ShapeSpec>,
-    /// `"lattice"` (default) or `"bipi"`: pack the block with BIPI before running.
+    /// `"lattice"` (default), `"bipi"`: pack the block with BIPI before running, or `"usaw"`
+    /// (2-D, `boundary = "usaw"`): relax the lattice so that the usaw operators' zero-order
+    /// residual (vertex particles included) vanishes and, under gravity, so that still water
+    /// is at rest (`bisph_core::walls::usaw::relax_positions`, `balance_positions`).
     pub fill: Option<String>,
     /// Particle spacing of this block (default `resolution.dx`).
     pub dx: Option<f64>,
@@ -1328,10 +1331,18 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             check_shape(loaded, &hkey, hole, d, false)?;
         }
         if let Some(fill) = &b.fill {
-            if fill != "lattice" && fill != "bipi" {
+            if fill != "lattice" && fill != "bipi" && fill != "usaw" {
                 return e(
                     &format!("{key}.fill"),
-                    format!("expected \"lattice\" or \"bipi\", found \"{fill}\""),
+                    format!("expected \"lattice\", \"bipi\" or \"usaw\", found \"{fill}\""),
+                );
+            }
+            if fill == "usaw"
+                && (c.boundary != BoundaryName::Usaw || d != 2 || b.shape == "particles")
+            {
+                return e(
+                    &format!("{key}.fill"),
+                    "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"".into(),
                 );
             }
             if fill == "bipi" && b.shape == "particles" {
@@ -1961,4 +1972,21 @@ fn check_pack(loaded: &LoadedCase) -> Result<(), CaseError> {
 /// Where a run writes by default: `out/<case name>`.
 pub fn default_out_dir(case: &Case) -> PathBuf {
     PathBuf::from("out").join(&case.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `fill = "usaw"` relaxes for usaw walls only: elsewhere a named error.
+    #[test]
+    fn usaw_fill_needs_usaw_walls() {
+        let text = include_str!("../../../cases/usaw-tank-corner.toml");
+        assert!(parse_case("tank", text, &[]).is_ok());
+        let Err(err) = parse_case("tank", text, &["boundary=\"bi\"".to_string()]) else {
+            panic!("fill = \"usaw\" with bi walls must be refused");
+        };
+        let err = err.to_string();
+        assert!(err.contains("fluid_block[0].fill"), "{err}");
+    }
 }
