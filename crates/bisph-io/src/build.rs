@@ -10,7 +10,7 @@ use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
-use bisph_core::walls::usaw::WallInterpolation;
+use bisph_core::walls::usaw::{self, FitSetting, WallInterpolation};
 use bisph_core::walls::{
     Body, BoundaryElements, Coupling, FreeBody, Motion, Piston, PrescribedMotion, Stretch, Walls,
 };
@@ -192,7 +192,7 @@ fn relax_for_usaw<V: Vector>(
     surface: f64,
     eos: &Eos,
 ) {
-    let Some(vertices) = bisph_core::walls::usaw::Vertices::from_elements(
+    let Some(vertices) = usaw::Vertices::from_elements(
         elements,
         eos.rho0(),
         kernel.support,
@@ -207,36 +207,29 @@ fn relax_for_usaw<V: Vector>(
     } else {
         V::ZERO
     };
-    let volume = dx.powi(V::DIM as i32);
-    let mirror = if g > 0.0 { surface } else { f64::INFINITY };
-    bisph_core::walls::usaw::relax_positions(
+    let fit = FitSetting {
         kernel,
         dx,
-        points,
-        volume,
-        &vertices,
+        volume: dx.powi(V::DIM as i32),
+        vertices: &vertices,
         elements,
         up,
-        mirror,
-        USAW_FILL_ITERATIONS,
+        surface,
+        max_iterations: USAW_FILL_ITERATIONS,
+    };
+    // Without gravity there is no free surface to mirror.
+    let mirror = if g > 0.0 { surface } else { f64::INFINITY };
+    usaw::relax_positions(
+        &FitSetting {
+            surface: mirror,
+            ..fit
+        },
+        points,
     );
     if g > 0.0 {
         let pressure = |d: f64| eos.hydrostatic_pressure(g, d);
         let density = |p: f64| eos.density(p).unwrap_or(eos.rho0());
-        bisph_core::walls::usaw::balance_positions(
-            kernel,
-            dx,
-            points,
-            volume,
-            &vertices,
-            elements,
-            up,
-            surface,
-            g,
-            &pressure,
-            &density,
-            USAW_FILL_ITERATIONS,
-        );
+        usaw::balance_positions(&fit, points, g, &pressure, &density);
     }
 }
 

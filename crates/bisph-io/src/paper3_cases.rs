@@ -527,6 +527,23 @@ impl TankRun {
     }
 }
 
+/// The note on a pair of tank runs (eq 82, eq 83): the surface corners' peak speed and
+/// horizontal speed with their ratios, and the rest of the surface band's peak speed.
+fn region_peaks(pair: &[TankRun]) -> String {
+    let (n, c) = (&pair[0], &pair[1]);
+    format!(
+        "surface corners peak speed {:.4} / {:.4} m/s (eq 82 / eq 83, ratio {:.2}), horizontal {:.4} / {:.4} (ratio {:.2}); surface interior {:.4} / {:.4}",
+        n.peak(0, false),
+        c.peak(0, false),
+        n.peak(0, false) / c.peak(0, false),
+        n.peak(0, true),
+        c.peak(0, true),
+        n.peak(0, true) / c.peak(0, true),
+        n.peak(1, false),
+        c.peak(1, false),
+    )
+}
+
 /// Runs the closed tank `[0, width] x [0, depth]` (free surface at `depth`) to
 /// `t c0 / h_swl = end_plus` (`c0` the case's, with the overrides), sampling 200 times.
 fn tank_run(
@@ -1011,15 +1028,8 @@ impl ValidationCase for UsawTankCorner {
                 .map(|i| tank_run(&overrides(low, i, &[]), end_plus, width, 1.0 + 0.5 * low))
                 .collect::<Result<Vec<_>, _>>()?;
             report.notes.push(format!(
-                "dx = {low} (h_swl = 8 dx), t c0/h_swl <= {end_plus}: surface corners peak speed {:.4} / {:.4} m/s (eq 82 / eq 83, ratio {:.2}), horizontal {:.4} / {:.4} (ratio {:.2}); surface interior {:.4} / {:.4}",
-                pair[0].peak(0, false),
-                pair[1].peak(0, false),
-                pair[0].peak(0, false) / pair[1].peak(0, false),
-                pair[0].peak(0, true),
-                pair[1].peak(0, true),
-                pair[0].peak(0, true) / pair[1].peak(0, true),
-                pair[0].peak(1, false),
-                pair[1].peak(1, false),
+                "dx = {low} (h_swl = 8 dx), t c0/h_swl <= {end_plus}: {}",
+                region_peaks(&pair)
             ));
         }
         // Other starts and sound speeds (reported): the lattice start, and c0 = 10 (at the
@@ -1044,15 +1054,8 @@ impl ValidationCase for UsawTankCorner {
                 .map(|i| tank_run(&overrides(dx, i, start), window, width, depth))
                 .collect::<Result<Vec<_>, _>>()?;
             report.notes.push(format!(
-                "{label}, dx = {dx}, t c0/h_swl <= {window}: surface corners peak speed {:.4} / {:.4} m/s (eq 82 / eq 83, ratio {:.2}), horizontal {:.4} / {:.4} (ratio {:.2}); surface interior {:.4} / {:.4}; whole tank {:.4} / {:.4} (ratio {:.2}){}",
-                pair[0].peak(0, false),
-                pair[1].peak(0, false),
-                pair[0].peak(0, false) / pair[1].peak(0, false),
-                pair[0].peak(0, true),
-                pair[1].peak(0, true),
-                pair[0].peak(0, true) / pair[1].peak(0, true),
-                pair[0].peak(1, false),
-                pair[1].peak(1, false),
+                "{label}, dx = {dx}, t c0/h_swl <= {window}: {}; whole tank {:.4} / {:.4} (ratio {:.2}){}",
+                region_peaks(&pair),
                 pair[0].tank_peak(false),
                 pair[1].tank_peak(false),
                 pair[0].tank_peak(false) / pair[1].tank_peak(false),

@@ -476,6 +476,30 @@ fn zero_order_residual<V: Vector>(
     r - grad_gamma(kernel, xa, elements, element_grid)
 }
 
+/// What both stages of a start that fits usaw walls read ([`relax_positions`],
+/// [`balance_positions`]): the kernel, the lattice spacing `dx` and the particle volume
+/// (`dx^d`), the walls (vertex particles with their volumes `m_v / rho_v`, and segments), the
+/// free surface at height `surface` along `up`, and the most iterations of each stage.
+#[derive(Clone, Copy)]
+pub struct FitSetting<'a, V: Vector> {
+    /// The kernel.
+    pub kernel: &'a Wendland,
+    /// Lattice spacing.
+    pub dx: f64,
+    /// Volume of each fluid particle.
+    pub volume: f64,
+    /// The vertex particles.
+    pub vertices: &'a Vertices<V>,
+    /// The wall segments.
+    pub elements: &'a BoundaryElements<V>,
+    /// Unit vector against gravity.
+    pub up: V,
+    /// Height of the free surface along `up`.
+    pub surface: f64,
+    /// Most iterations of each stage.
+    pub max_iterations: usize,
+}
+
 /// Particle initialisation that fits usaw walls: shifts the fluid particles `x` (volume
 /// `volume` each, the lattice's `dx^d`) down the zero-order residual `R_a` of the usaw
 /// operators ([`zero_order_residual`]): `dx_a = -D R_a`, `D = 0.5 h^2`, at most `0.1 dx` per
@@ -487,23 +511,21 @@ fn zero_order_residual<V: Vector>(
 /// above the surface by a support, as an open tank's do). Stops when no particle moves by
 /// more than `1e-6 dx` or after `max_iterations`. Vertex volumes are those of `vertices`
 /// (`m_v / rho_v`).
-#[allow(clippy::too_many_arguments)]
-pub fn relax_positions<V: Vector>(
-    kernel: &Wendland,
-    dx: f64,
-    x: &mut [V],
-    volume: f64,
-    vertices: &Vertices<V>,
-    elements: &BoundaryElements<V>,
-    up: V,
-    surface: f64,
-    max_iterations: usize,
-) -> Relaxation {
+pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relaxation {
+    let FitSetting {
+        kernel,
+        dx,
+        volume,
+        vertices,
+        elements,
+        up,
+        surface,
+        max_iterations,
+    } = *fit;
     let support = kernel.support;
     let mut element_grid = CellGrid::new(support + elements.max_reach);
     element_grid.rebuild(&elements.centre);
     let diffusion = 0.5 * kernel.h * kernel.h;
-    let cap = 0.1 * dx;
     let measure = |x: &[V]| {
         // The fluid and its mirror images across the surface.
         let mut points = x.to_vec();
@@ -531,42 +553,9 @@ pub fn relax_positions<V: Vector>(
             .collect();
         r
     };
-    let largest = |x: &[V], r: &[V]| {
-        let (mut all, mut deep) = (0.0f64, 0.0f64);
-        for (p, ra) in x.iter().zip(r) {
-            all = all.max(ra.length());
-            if surface - p.dot(up) > support {
-                deep = deep.max(ra.length());
-            }
-        }
-        (all, deep)
-    };
-    let mut r = measure(x);
-    let (all0, deep0) = largest(x, &r);
-    let mut iterations = 0;
-    while iterations < max_iterations {
-        let mut moved = 0.0f64;
-        for (p, ra) in x.iter_mut().zip(&r) {
-            let mut shift = *ra * -diffusion;
-            let l = shift.length();
-            if l > cap {
-                shift = shift * (cap / l);
-            }
-            *p += shift;
-            moved = moved.max(shift.length());
-        }
-        iterations += 1;
-        r = measure(x);
-        if moved < 1e-6 * dx {
-            break;
-        }
-    }
-    let (all1, deep1) = largest(x, &r);
-    Relaxation {
-        iterations,
-        deep_residual: [deep0, deep1],
-        residual: [all0, all1],
-    }
+    let depth = |p: V| surface - p.dot(up);
+    let step = |_: V, r: V| r * -diffusion;
+    shift_until_still(x, dx, depth, support, max_iterations, measure, step)
 }
 
 /// Second stage of [`relax_positions`], for still water: shifts the fluid particles `x` along
@@ -581,21 +570,23 @@ pub fn relax_positions<V: Vector>(
 /// (the stiffness of the constant-pressure part), at most `0.1 dx`; stops when no particle
 /// moves by more than `1e-6 dx` or after `max_iterations`. Returns the iterations and the
 /// largest `|a|` before and after, over all particles and over those deeper than a support.
-#[allow(clippy::too_many_arguments)]
 pub fn balance_positions<V: Vector>(
-    kernel: &Wendland,
-    dx: f64,
+    fit: &FitSetting<'_, V>,
     x: &mut [V],
-    volume: f64,
-    vertices: &Vertices<V>,
-    elements: &BoundaryElements<V>,
-    up: V,
-    surface: f64,
     g: f64,
     pressure: &(dyn Fn(f64) -> f64 + Sync),
     density: &(dyn Fn(f64) -> f64 + Sync),
-    max_iterations: usize,
 ) -> Relaxation {
+    let FitSetting {
+        kernel,
+        dx,
+        volume,
+        vertices,
+        elements,
+        up,
+        surface,
+        max_iterations,
+    } = *fit;
     let support = kernel.support;
     let mut grid = CellGrid::new(support + elements.max_reach);
     grid.rebuild(&elements.centre);
@@ -643,40 +634,60 @@ pub fn balance_positions<V: Vector>(
             })
             .collect()
     };
-    let largest = |x: &[V], a: &[V]| {
+    let depth = |p: V| surface - p.dot(up);
+    let step = |y: V, a: V| {
+        let pa = p_at(y).max(0.0);
+        a * (0.5 * kernel.h * kernel.h / (2.0 * pa / density(pa) + g * kernel.h))
+    };
+    shift_until_still(x, dx, depth, support, max_iterations, accelerations, step)
+}
+
+/// The iteration of [`relax_positions`] and [`balance_positions`]: evaluates the field
+/// `field(x)` (a residual or an acceleration), shifts each particle by `step(x_a, f_a)`, at
+/// most `0.1 dx`, until no particle moves by more than `1e-6 dx` or `max_iterations`; reports
+/// the largest `|f|` before and after, over all particles and over those deeper than `support`
+/// (`depth(x_a)` below the surface).
+fn shift_until_still<V: Vector>(
+    x: &mut [V],
+    dx: f64,
+    depth: impl Fn(V) -> f64,
+    support: f64,
+    max_iterations: usize,
+    field: impl Fn(&[V]) -> Vec<V>,
+    step: impl Fn(V, V) -> V,
+) -> Relaxation {
+    let largest = |x: &[V], f: &[V]| {
         let (mut all, mut deep) = (0.0f64, 0.0f64);
-        for (p, aa) in x.iter().zip(a) {
-            all = all.max(aa.length());
-            if surface - p.dot(up) > support {
-                deep = deep.max(aa.length());
+        for (&p, fa) in x.iter().zip(f) {
+            all = all.max(fa.length());
+            if depth(p) > support {
+                deep = deep.max(fa.length());
             }
         }
         (all, deep)
     };
     let cap = 0.1 * dx;
-    let mut a = accelerations(x);
-    let (all0, deep0) = largest(x, &a);
+    let mut f = field(x);
+    let (all0, deep0) = largest(x, &f);
     let mut iterations = 0;
     while iterations < max_iterations {
         let mut moved = 0.0f64;
-        for (y, aa) in x.iter_mut().zip(&a) {
-            let pa = p_at(*y).max(0.0);
-            let beta = 0.5 * kernel.h * kernel.h / (2.0 * pa / density(pa) + g * kernel.h);
-            let mut shift = *aa * beta;
+        for (p, &fa) in x.iter_mut().zip(&f) {
+            let mut shift = step(*p, fa);
             let l = shift.length();
             if l > cap {
                 shift = shift * (cap / l);
             }
-            *y += shift;
+            *p += shift;
             moved = moved.max(shift.length());
         }
         iterations += 1;
-        a = accelerations(x);
+        f = field(x);
         if moved < 1e-6 * dx {
             break;
         }
     }
-    let (all1, deep1) = largest(x, &a);
+    let (all1, deep1) = largest(x, &f);
     Relaxation {
         iterations,
         deep_residual: [deep0, deep1],
@@ -862,13 +873,30 @@ mod tests {
         (kernel, e, v, x)
     }
 
+    /// The fit of [`still_tank`]: surface 1.05, at most 5000 iterations per stage.
+    fn tank_fit<'a>(
+        kernel: &'a Wendland,
+        vertices: &'a Vertices<DVec2>,
+        elements: &'a BoundaryElements<DVec2>,
+    ) -> FitSetting<'a, DVec2> {
+        FitSetting {
+            kernel,
+            dx: 0.1,
+            volume: 0.01,
+            vertices,
+            elements,
+            up: DVec2::new(0.0, 1.0),
+            surface: 1.05,
+            max_iterations: 5000,
+        }
+    }
+
     /// The zero-order residual (vertex particles included) falls by three orders of magnitude
     /// from the lattice's, where the fluid sum overshoots the exact `grad gamma` near walls.
     #[test]
     fn relaxation_removes_the_zero_order_residual() {
         let (kernel, e, v, mut x) = still_tank();
-        let up = DVec2::new(0.0, 1.0);
-        let r = relax_positions(&kernel, 0.1, &mut x, 0.01, &v, &e, up, 1.05, 5000);
+        let r = relax_positions(&tank_fit(&kernel, &v, &e), &mut x);
         assert!(r.deep_residual[0] > 0.1, "lattice residual {:?}", r);
         assert!(r.residual[1] < 1e-3 * r.residual[0], "{r:?}");
         assert!(
@@ -882,8 +910,8 @@ mod tests {
     #[test]
     fn balance_holds_still_water_at_rest() {
         let (kernel, e, v, mut x) = still_tank();
-        let up = DVec2::new(0.0, 1.0);
-        relax_positions(&kernel, 0.1, &mut x, 0.01, &v, &e, up, 1.05, 5000);
+        let fit = tank_fit(&kernel, &v, &e);
+        relax_positions(&fit, &mut x);
         let eos = Eos::Tait {
             rho0: 1000.0,
             c0: 20.0,
@@ -892,9 +920,7 @@ mod tests {
         };
         let pressure = |d: f64| eos.hydrostatic_pressure(9.81, d);
         let density = |p: f64| eos.density(p).unwrap();
-        let r = balance_positions(
-            &kernel, 0.1, &mut x, 0.01, &v, &e, up, 1.05, 9.81, &pressure, &density, 5000,
-        );
+        let r = balance_positions(&fit, &mut x, 9.81, &pressure, &density);
         assert!(r.residual[0] > 1.0, "{r:?}");
         assert!(r.residual[1] < 0.05 * r.residual[0], "{r:?}");
     }
