@@ -448,32 +448,53 @@ pub struct Relaxation {
     pub residual: [f64; 2],
 }
 
-/// The zero-order residual of the usaw operators at `xa` (paper 3, eq 37 with a constant
-/// pressure, divided by `2 p`): `R_a = sum_P V_b grad_a W_ab - grad gamma_a`, over the fluid
-/// `points` (volume `volume` each, found through `grid`) and the vertex particles, with the
-/// exact `grad gamma_a` of the segments (eq 10).
+/// The pressure sum of eq 37 (paper 3, `k = 0`, before the division by `gamma_a`) at `xa`,
+/// pressure `pa`, density `rho_a`: the fluid pairs `sum_F (p_a + p_b) V_b grad_a W_ab` over
+/// `points` (pressures `p`, volume `volume` each, found through `grid`; the sweep's
+/// [`crate::terms::pressure_gradient::pair`]) plus the wall part of [`UsawWalls`] (vertex pairs
+/// and segments, with the vertex pressures held in `walls`). With every pressure `1/2` it is
+/// the zero-order residual `R_a = sum_P V_b grad_a W_ab - grad gamma_a`.
 #[allow(clippy::too_many_arguments)]
-fn zero_order_residual<V: Vector>(
+fn pressure_sum<V: Vector>(
     kernel: &Wendland,
-    xa: V,
+    (xa, pa, rho_a): (V, f64, f64),
     points: &[V],
+    p: &[f64],
     grid: &CellGrid<V>,
     volume: f64,
-    vertices: &Vertices<V>,
+    walls: &UsawWalls<'_, V>,
     elements: &BoundaryElements<V>,
     element_grid: &CellGrid<V>,
 ) -> V {
-    let mut r = V::ZERO;
-    // r_ab = x_b - x_a, so grad_a W_ab = -F r_ab (zero for the particle itself).
-    grid.for_each_neighbour(xa, points, kernel.support, |_, r_ab, d| {
-        r -= r_ab * (kernel.gradient_factor(d) * volume);
+    let mut sum = V::ZERO;
+    grid.for_each_neighbour(xa, points, kernel.support, |b, r_ab, d| {
+        let grad_w = r_ab * kernel.gradient_factor(d);
+        sum += crate::terms::pressure_gradient::pair(pa, p[b], grad_w, volume);
     });
-    vertices
-        .grid
-        .for_each_neighbour(xa, &vertices.position, kernel.support, |v, r_av, d| {
-            r -= r_av * (kernel.gradient_factor(d) * vertices.volume[v]);
-        });
-    r - grad_gamma(kernel, xa, elements, element_grid)
+    let view = ParticleView {
+        index: 0,
+        x: xa,
+        u: V::ZERO,
+        p: pa,
+        rho: rho_a,
+    };
+    sum + walls
+        .particle_terms(kernel, &view, elements, element_grid)
+        .pressure_gradient
+}
+
+/// The usaw walls of the two fit stages: `vertices` with the pressures `pressure` and
+/// densities `density` (at rest), `k = 0`, walls in tension allowed (paper 3 as written).
+fn walls_with_pressures<V: Vector>(
+    vertices: &Vertices<V>,
+    pressure: impl Fn(V) -> f64,
+    density: impl Fn(f64) -> f64,
+) -> Vertices<V> {
+    let mut v = vertices.clone();
+    v.pressure = v.position.iter().map(|&y| pressure(y)).collect();
+    v.density = v.pressure.iter().map(|&p| density(p)).collect();
+    v.velocity = vec![V::ZERO; v.position.len()];
+    v
 }
 
 /// What both stages of a start that fits usaw walls read ([`relax_positions`],
@@ -502,7 +523,7 @@ pub struct FitSetting<'a, V: Vector> {
 
 /// Particle initialisation that fits usaw walls: shifts the fluid particles `x` (volume
 /// `volume` each, the lattice's `dx^d`) down the zero-order residual `R_a` of the usaw
-/// operators ([`zero_order_residual`]): `dx_a = -D R_a`, `D = 0.5 h^2`, at most `0.1 dx` per
+/// operators ([`pressure_sum`] with every pressure `1/2`): `dx_a = -D R_a`, `D = 0.5 h^2`, at most `0.1 dx` per
 /// iteration, as BIPI does (paper 4, eq 15) but with the residual that eq 37 sees (vertex
 /// particles in the volume sum, segments by their exact `grad gamma_as`), so that a
 /// constant pressure exerts no force at rest. The free surface (at height `surface` along
@@ -526,6 +547,12 @@ pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relax
     let mut element_grid = CellGrid::new(support + elements.max_reach);
     element_grid.rebuild(&elements.centre);
     let diffusion = 0.5 * kernel.h * kernel.h;
+    let half = walls_with_pressures(vertices, |_| 0.5, |_| 1.0);
+    let walls = UsawWalls {
+        vertices: &half,
+        density_power: 0,
+        no_tension: false,
+    };
     let measure = |x: &[V]| {
         // The fluid and its mirror images across the surface.
         let mut points = x.to_vec();
@@ -534,24 +561,25 @@ pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relax
                 .filter(|&&p| surface - p.dot(up) < support)
                 .map(|&p| p + up * (2.0 * (surface - p.dot(up)))),
         );
+        let p = vec![0.5; points.len()];
         let mut grid = CellGrid::new(support);
         grid.rebuild(&points);
-        let r: Vec<V> = x
-            .par_iter()
+        x.par_iter()
             .map(|&xa| {
-                zero_order_residual(
+                let at = (xa, 0.5, 1.0);
+                pressure_sum(
                     kernel,
-                    xa,
+                    at,
                     &points,
+                    &p,
                     &grid,
                     volume,
-                    vertices,
+                    &walls,
                     elements,
                     &element_grid,
                 )
             })
-            .collect();
-        r
+            .collect::<Vec<V>>()
     };
     let depth = |p: V| surface - p.dot(up);
     let step = |_: V, r: V| r * -diffusion;
@@ -599,12 +627,12 @@ pub fn balance_positions<V: Vector>(
             rho0 * g * d
         }
     };
-    let p_vertex: Vec<f64> = vertices.position.iter().map(|&y| p_at(y)).collect();
-    let p_segment: Vec<f64> = vertices
-        .segment
-        .iter()
-        .map(|[a, b]| 0.5 * (p_vertex[*a as usize] + p_vertex[*b as usize]))
-        .collect();
+    let at_rest = walls_with_pressures(vertices, p_at, density);
+    let walls = UsawWalls {
+        vertices: &at_rest,
+        density_power: 0,
+        no_tension: false,
+    };
     let accelerations = |x: &[V]| -> Vec<V> {
         let p: Vec<f64> = x.iter().map(|&y| p_at(y)).collect();
         let mut fluid_grid = CellGrid::new(support);
@@ -612,25 +640,20 @@ pub fn balance_positions<V: Vector>(
         (0..x.len())
             .into_par_iter()
             .map(|a| {
-                let (xa, pa) = (x[a], p[a]);
-                let mut grad = V::ZERO;
-                // r_ab = x_b - x_a, so grad_a W_ab = -F r_ab (zero for the particle itself).
-                fluid_grid.for_each_neighbour(xa, x, support, |b, r_ab, d| {
-                    grad -= r_ab * (kernel.gradient_factor(d) * (pa + p[b]) * volume);
-                });
-                vertices
-                    .grid
-                    .for_each_neighbour(xa, &vertices.position, support, |v, r_av, d| {
-                        grad -= r_av
-                            * (kernel.gradient_factor(d) * (pa + p_vertex[v]) * vertices.volume[v]);
-                    });
-                let radius = support + elements.max_reach;
-                grid.for_each_candidate_within_shifted(xa, radius, |j, image| {
-                    let gg = element_grad_gamma(kernel, xa - image, elements, j);
-                    grad -= gg * (pa + p_segment[j]);
-                });
-                let gamma = super::geometric_shepard::gamma(kernel, xa, elements, &grid);
-                grad * (-1.0 / (gamma * density(pa))) - up * g
+                let at = (x[a], p[a], density(p[a]));
+                let sum = pressure_sum(
+                    kernel,
+                    at,
+                    x,
+                    &p,
+                    &fluid_grid,
+                    volume,
+                    &walls,
+                    elements,
+                    &grid,
+                );
+                let gamma = super::geometric_shepard::gamma(kernel, x[a], elements, &grid);
+                sum * (-1.0 / (gamma * at.2)) - up * g
             })
             .collect()
     };
