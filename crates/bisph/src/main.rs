@@ -110,7 +110,7 @@ struct RunArgs {
 
 /// Exit codes: 0 success, 1 bad input, 2 validation out of tolerance, 4 I/O error,
 /// 5 checkpoint refused, 6 not enough memory, 10 interrupted (checkpoint written),
-/// 20-26 a divergence watch tripped (docs/errors.md).
+/// 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
