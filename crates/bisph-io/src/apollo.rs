@@ -122,14 +122,14 @@ pub fn run_apollo(name: &str, quick: bool, out: &Path) -> Result<CaseReport, Str
             (a.behind + b.behind) as f64,
             0.0,
             Tolerance::AtMost,
-            "issue 8: no particle inside the capsule",
+            "no particle inside the capsule",
         ),
         Check::new(
             "max fluid+body energy drift, iterated / staggered",
             a.drift_max / b.drift_max,
             1.0,
             Tolerance::AtMost,
-            "issue 8: coupling inside the iterations drifts less than staggered",
+            "coupling inside the iterations drifts less than staggered",
         ),
     ];
     if !quick {

@@ -355,8 +355,8 @@ impl Default for MidpointSection {
 }
 
 /// Default skin of the explicit scheme's neighbour list (`time.neighbour_skin`): between 0.05
-/// and 0.1 the filtered candidates and the rebuilds balance on the dam break (README,
-/// "Verlet neighbour list"); the larger one rebuilds less often in faster flows.
+/// and 0.1 the filtered candidates and the rebuilds balance on the dam break
+/// (docs/performance.md); the larger one rebuilds less often in faster flows.
 pub const DEFAULT_NEIGHBOUR_SKIN: f64 = 0.1;
 
 fn default_neighbour_skin() -> f64 {

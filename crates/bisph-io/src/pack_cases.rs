@@ -1,6 +1,5 @@
 //! Validation cases of BIPI packing (paper 4): the trapezoid, the 2-D bunny, the NACA 6412
-//! airfoil in a box (fluid and airfoil), and 3-D solids. Checks, per packed block (issue
-//! acceptance): every particle strictly inside; the first layer at `dx/2` from the wall on
+//! airfoil in a box (fluid and airfoil), and 3-D solids. Checks, per packed block: every particle strictly inside; the first layer at `dx/2` from the wall on
 //! average within 10%; mean `|grad C|` over all particles at least halved from the lattice;
 //! largest `|grad C|` lowered.
 
@@ -43,7 +42,7 @@ impl ValidationCase for PackCase {
             name: self.name.to_string(),
             ..Default::default()
         };
-        let source = "issue 5 acceptance (paper 4)";
+        let source = "paper 4";
         for b in &summary.blocks {
             let tag = if summary.blocks.len() > 1 {
                 format!("block {} ", b.block)
@@ -148,7 +147,7 @@ impl ValidationCase for PackCase {
 /// The packing validation cases.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
     vec![
-        // Issue 5, trapezoid at h = 2 dx (paper 4, 4.1): with the 2-D push from the relaxed
+        // Trapezoid at h = 2 dx (paper 4, 4.1): with the 2-D push from the relaxed
         // balance distance (0.472 dx, `packing::relaxed_balance_distance`) the flat walls' first
         // layer sits where its `grad C` nearly vanishes (0.025-0.053 1/m at dx = 0.02 m) and mean
         // `|grad C|` over all particles falls 3.18x (3.17x quick). The largest value stays at the
@@ -156,7 +155,7 @@ pub fn cases() -> Vec<Box<dyn ValidationCase>> {
         // (1.19x) at dx = 0.02 m, but only 0.6202 -> 0.6087 (1.019x) at the quick dx = 0.04 m,
         // where the lattice's own largest (in the top corners) is lower. The slanted sides' first
         // layer keeps one particle per lattice row (2/sqrt 5 per dx of wall) and 0.59 1/m. With
-        // the push from `dx/2` (before) the mean fell 1.67x (1.90x quick). See the README.
+        // the push from `dx/2` the mean falls only 1.67x (1.90x quick). See docs/validation.md.
         Box::new(PackCase {
             gradc_known_failure: None,
             name: "pack-trapezoid-2d",

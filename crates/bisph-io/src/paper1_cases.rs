@@ -160,7 +160,7 @@ impl ValidationCase for JetImpact {
                 s.energy_drift_max_relative,
                 0.005,
                 Tolerance::AtMost,
-                "issue 3 acceptance (paper 1 fig 3: constant total)",
+                "paper 1, fig 3: constant total",
             )],
             plots: vec![energy_plot(out, "Jet impact: energy", s.energy_scale)?],
             notes: vec![format!(
@@ -373,7 +373,7 @@ impl ValidationCase for AdiabaticPiston {
                 ratio(fine),
                 1.0,
                 Tolerance::Absolute(0.05),
-                "issue 3 acceptance",
+                "paper 1, eq 54 (within 5% at the finest resolution)",
             ),
             Check::new(
                 &format!(
@@ -383,7 +383,7 @@ impl ValidationCase for AdiabaticPiston {
                 (ratio(fine) - 1.0).abs(),
                 (ratio(coarse) - 1.0).abs(),
                 Tolerance::AtMost,
-                "issue 3 acceptance: approaching the ODE as the resolution grows",
+                "paper 1, eq 54: approaching the ODE as the resolution grows",
             ),
         ];
         for r in &runs {
@@ -402,7 +402,7 @@ impl ValidationCase for AdiabaticPiston {
                 r.drift,
                 0.005,
                 Tolerance::AtMost,
-                "issue 3 acceptance; oscillation energy m (A omega)^2 / 2",
+                "paper 1, 5.2: conserved; oscillation energy m (A omega)^2 / 2",
             ));
         }
         let notes = runs
@@ -552,14 +552,14 @@ impl ValidationCase for LobovskyDamBreak {
                 t_reached,
                 8.0 - 1e-6,
                 Tolerance::AtLeast,
-                "issue 3 acceptance",
+                "paper 1, 5.3: stable to t* = 8",
             ));
             checks.push(Check::new(
                 &format!("H/{n}: abs(energy loss) at t*=3"),
                 losses[0].abs(),
                 0.002,
                 Tolerance::AtMost,
-                "issue 3 acceptance (< 0.2% before impact)",
+                "paper 1, 5.3 (< 0.2% before impact)",
             ));
             losses_by_resolution.push((n, losses));
             // Sensor peaks over the first impact, t* in [1.8, 3.5], of the signal averaged over
@@ -671,7 +671,7 @@ impl ValidationCase for LobovskyDamBreak {
                                 t_reached,
                                 8.0 - 1e-6,
                                 Tolerance::AtLeast,
-                                "issue 3 acceptance",
+                                "paper 1, 5.3: stable to t* = 8",
                             ));
                         }
                     }

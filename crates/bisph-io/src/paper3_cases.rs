@@ -120,7 +120,7 @@ impl ValidationCase for UsawGamma {
             worst,
             1e-12,
             Tolerance::AtMost,
-            "composite Gauss-Legendre over the clipped segment (issue 6 acceptance: 1e-12)",
+            "composite Gauss-Legendre over the clipped segment (bound 1e-12)",
         ));
         // 2. Closed polygon (a box): sum of grad gamma_as vs FD of the geometric gamma.
         let (dx, h) = (0.025, 0.05);
@@ -179,7 +179,7 @@ impl ValidationCase for UsawGamma {
             worst_int,
             1e-3,
             Tolerance::AtMost,
-            "issue 6 acceptance: within 1e-3",
+            "geometric gamma of paper 2 at the same point (bound 1e-3)",
         ));
         report.plots.push(plot(
             out,
@@ -741,7 +741,7 @@ impl ValidationCase for UsawStillWater {
                     dev,
                     0.01,
                     Tolerance::AtMost,
-                    "paper 3, fig 8: the surface stays (issue 6 acceptance: within 1%)",
+                    "paper 3, fig 8: the surface stays (within 1%)",
                 ));
                 report.checks.push(Check::new(
                     &format!("{label}: reached t c0/h = 100"),
@@ -795,7 +795,7 @@ impl ValidationCase for UsawStillWater {
 /// spacing `dx`: the paper's `eta ~ 10^3 dx / L` with `L = h_swl = 1 m`, so that `K = c0 L /
 /// 10^3` does not grow with `dx / L`. A fixed `eta = 10` (5x this `K` at `dx = 0.05`) lets the
 /// diffusion slave the densities of a close pair in the free-surface row to their heights
-/// (eq 81), and the pair next to the side wall turns over after `t ~ 4.5 s` (README).
+/// (eq 81), and the pair next to the side wall turns over after `t ~ 4.5 s` (docs/validation.md).
 fn tank_eta(dx: f64) -> f64 {
     1.0e3 * dx / 1.0
 }
@@ -1013,7 +1013,7 @@ impl ValidationCase for UsawTankCorner {
                 n.peak(0, false) / c.peak(0, false),
                 10.0,
                 Tolerance::AtLeast,
-                "paper 3, 7.2 (fig 9): particle movement an order of magnitude larger with eq 82 (issue 6 acceptance: tenfold)",
+                "paper 3, 7.2 (fig 9): particle movement an order of magnitude larger with eq 82 (tenfold)",
             ),
         );
         report.checks.push(Check::new(
@@ -1021,14 +1021,14 @@ impl ValidationCase for UsawTankCorner {
             n.peak(0, true) / c.peak(0, true),
             10.0,
             Tolerance::AtLeast,
-            "paper 3, 7.2 (fig 9): an order of magnitude (issue 6 acceptance: tenfold)",
+            "paper 3, 7.2 (fig 9): an order of magnitude (tenfold)",
         ));
         report.checks.push(Check::new(
             "whole tank: peak speed, eq 82 / eq 83",
             n.tank_peak(false) / c.tank_peak(false),
             10.0,
             Tolerance::AtLeast,
-            "paper 3, fig 9 (issue 6 acceptance: tenfold)",
+            "paper 3, fig 9: an order of magnitude (tenfold)",
         ));
         if !quick {
             // The paper's "relatively low resolution": h_swl = 8 dx, reported.
@@ -1122,14 +1122,14 @@ impl ValidationCase for UsawWedge {
             if main.reached { 1.0 } else { 0.0 },
             1.0,
             Tolerance::AtLeast,
-            "issue 6 acceptance: runs stably to t = 2 s",
+            "paper 3, 8: runs stably to t = 2 s",
         ));
         report.checks.push(Check::new(
             "deepest particle behind a wall over all steps (signed distance of the wall-crossing watch) / (h/100)",
             main.deepest_over_h100,
             1.0,
             Tolerance::AtMost,
-            "issue 6 acceptance: no particle crosses a wall (the wall-crossing watch's h/100, diagnostics.wall_crossing)",
+            "no particle crosses a wall (the wall-crossing watch's h/100, diagnostics.wall_crossing)",
         ));
         report.checks.push(Check::new(
             "|force| before the front can arrive (t < (0.35 m - 2h) / 2 sqrt(g H)) [N/m]",

@@ -178,14 +178,14 @@ impl ValidationCase for PoiseuilleFlux {
                 e58 / e63.max(1e-300),
                 1000.0,
                 Tolerance::AtLeast,
-                "issue 7 acceptance (paper 3: about 1e5)",
+                "paper 3, fig 4: about 1e5",
             ),
             Check::new(
                 "eq 63: max |u - parabola| / u_max",
                 profile_error,
                 0.01,
                 Tolerance::AtMost,
-                "issue 7 acceptance: within 1 % of the analytic parabola",
+                "analytic parabola (within 1 %)",
             ),
         ];
         let analytic_force = 12.0 * 0.5 * 1.0;
@@ -410,7 +410,7 @@ impl ValidationCase for RobinWave {
                 mean2 / mean1,
                 1.0,
                 Tolerance::AtMost,
-                "issue 7 acceptance (paper 3 fig 7: m = 2 lower, up to 30 %)",
+                "paper 3, fig 7: m = 2 lower, up to 30 %",
             ),
             Check::new(
                 "peak boundary error m = 2 / m = 1",

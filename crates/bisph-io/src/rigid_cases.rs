@@ -264,7 +264,7 @@ impl ValidationCase for FloatingBox {
                 r.draft,
                 draft_ref,
                 Tolerance::Relative(0.05),
-                "Archimedes d = m / (rho0 B); issue 8: 5% at the quick resolution",
+                "Archimedes d = m / (rho0 B); 5% at the quick resolution",
             ));
             checks.push(Check::new(
                 &format!("dx = {}: inviscid heave period [s]", r.dx),
@@ -310,7 +310,7 @@ impl ValidationCase for FloatingBox {
                 (fine.draft - draft_ref).abs() - (coarse.draft - draft_ref).abs(),
                 2.0 * fine.draft_sigma.hypot(coarse.draft_sigma),
                 Tolerance::AtMost,
-                "issue 8: closer to Archimedes at the finer resolution (bound: twice the standard error of the difference of the window means)",
+                "closer to Archimedes at the finer resolution (bound: twice the standard error of the difference of the window means)",
             ));
             checks.push(Check::new(
                 &format!(
@@ -396,7 +396,7 @@ impl ValidationCase for HeldBox {
                     lift / lift_ref,
                     1.0,
                     Tolerance::Relative(tolerance),
-                    "Archimedes; slow sloshing modes move the 0.9 s mean by a few % (README)",
+                    "Archimedes; slow sloshing modes move the 0.9 s mean by a few %",
                 ),
                 Check::new(
                     "particles inside the box at the end",

@@ -40,7 +40,7 @@ pub enum RunError {
 }
 
 impl RunError {
-    /// Exit code of `bisph run` for this error (see the table in `docs/errors.md`).
+    /// Exit code of `bisph run` for this error (see the table in `docs/outputs-and-errors.md`).
     pub fn exit_code(&self) -> u8 {
         match self {
             RunError::Case(_) => 1,
@@ -133,7 +133,7 @@ pub struct Summary {
     pub steps: u64,
     /// Simulated time reached [s].
     pub time: f64,
-    /// Wall-clock seconds of the time loop (outputs included; all sessions of a resumed run).
+    /// Wall-clock seconds of the time loop (outputs included; all invocations of a resumed run).
     pub wall_seconds: f64,
     /// Fluid particles times steps over wall seconds.
     pub particle_steps_per_second: f64,
@@ -166,9 +166,9 @@ pub struct Summary {
     pub threads: usize,
     /// VTK frames written.
     pub frames: usize,
-    /// Checkpoints written by this session.
+    /// Checkpoints written by this invocation.
     pub checkpoints: u64,
-    /// Step this session resumed from (absent for a fresh run).
+    /// Step this invocation resumed from (absent for a fresh run).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub resumed_from_step: Option<u64>,
     /// Free bodies: largest `|E_fluid + E_bodies - (same at 0)| / E_scale` over the run, with

@@ -90,7 +90,7 @@ impl ValidationCase for SphericTest2 {
     }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
         // Quick: dx = 0.55/8 with the energy-conserving walls (the geometric Shepard factor
-        // costs about 9x more per step on this scale; see the README); full: the case file
+        // costs about 9x more per step on this scale); full: the case file
         // (dx = 0.55/45, classic BI with the geometric Shepard factor).
         let settings: &[&str] = if quick {
             &[
@@ -175,7 +175,7 @@ impl ValidationCase for SphericTest2 {
                 arrival_sim,
                 arrival_exp,
                 Tolerance::Absolute(0.05),
-                "MARIN experiment (first P1 > 1 kPa); issue 8: within 0.05 s",
+                "MARIN experiment (first P1 > 1 kPa); within 0.05 s",
             ),
             Check::new(
                 "RMS(H2 - experiment) [m]",
@@ -198,7 +198,7 @@ impl ValidationCase for SphericTest2 {
                 peak_sim,
                 peak_exp,
                 Tolerance::Relative(0.3),
-                "MARIN experiment; issue 8: within 30% at dx = 0.55/45",
+                "MARIN experiment; within 30% at dx = 0.55/45",
             ));
         }
         Ok(CaseReport {

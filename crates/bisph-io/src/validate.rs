@@ -33,8 +33,8 @@ pub struct Check {
     pub tolerance: Tolerance,
     /// Where the reference comes from.
     pub source: String,
-    /// Why this check is known to fail (an open issue): reported as `xfail`, not counted as
-    /// a failure; `None` for a normal check.
+    /// Why this check is known to fail (a stated limitation): reported as `xfail`, not counted
+    /// as a failure; `None` for a normal check.
     pub known_failure_reason: Option<String>,
 }
 

@@ -518,9 +518,9 @@ fn fuzz_corpus_regressions() {
     }
 }
 
-/// Hostile inputs found by review: each would once have been accepted and then exhausted memory
-/// (a coordinate of 1e300 sizing the cell grid), looped for ever (a next output time far in the
-/// past) or fed NaN into the geometry (an STL vertex `nan`).
+/// Hostile inputs that must be refused by name: accepted, each would exhaust memory (a
+/// coordinate of 1e300 sizing the cell grid), loop for ever (a next output time far in the past)
+/// or feed NaN into the geometry (an STL vertex `nan`).
 #[test]
 fn hostile_inputs_are_refused() {
     let (good, loaded) = checkpoint_bytes();

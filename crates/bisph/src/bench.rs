@@ -114,8 +114,8 @@ pub struct BenchArgs {
     /// the fewest threads, paired run by run.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
-    /// Pair interactions per second of another code on this machine (e.g. 55e6 for the
-    /// DualSPHysics figure of the issue): the summary gives the ratio of the medians to it.
+    /// Pair interactions per second of another code on this machine (e.g. 55e6 for
+    /// DualSPHysics on the 2-D dam break): the summary gives the ratio of the medians to it.
     #[arg(long, value_name = "PAIRS_PER_SECOND")]
     reference: Option<f64>,
     /// Also write the results as JSON to this file.

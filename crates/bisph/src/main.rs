@@ -110,7 +110,7 @@ struct RunArgs {
 
 /// Exit codes: 0 success, 1 bad input, 2 validation out of tolerance, 4 I/O error,
 /// 5 checkpoint refused, 6 not enough memory, 10 interrupted (checkpoint written),
-/// 20-26 a divergence watch tripped (docs/errors.md).
+/// 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -347,6 +347,14 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
         }
     }
     print!("{}", table(&reports));
+    // Plot links relative to report.md, so that the report folder reads the same wherever it
+    // is moved or published.
+    for r in &mut reports {
+        let case_dir = out.join(&r.name);
+        for p in &mut r.plots {
+            *p = report_link(p, &out, &case_dir, &r.name);
+        }
+    }
     let report_path = out.join("report.md");
     std::fs::write(&report_path, markdown(&reports, args.quick))
         .map_err(|e| (1, format!("cannot write {}: {e}", report_path.display())))?;
@@ -359,4 +367,21 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             format!("out of tolerance or failed: {}", failed.join(", ")),
         ))
     }
+}
+
+/// A plot path as `report.md` in `out` links it: relative to `out` when it lies there, else
+/// (a bare name written by a case) inside the case's folder when the file is there.
+fn report_link(
+    plot: &std::path::Path,
+    out: &std::path::Path,
+    case_dir: &std::path::Path,
+    case: &str,
+) -> PathBuf {
+    if let Ok(inside) = plot.strip_prefix(out) {
+        return inside.to_path_buf();
+    }
+    if plot.is_relative() && case_dir.join(plot).is_file() {
+        return std::path::Path::new(case).join(plot);
+    }
+    plot.to_path_buf()
 }

@@ -675,7 +675,7 @@ impl<V: WallIntegrals> Packer<V> {
 /// the layer's target lets it sink well inside (sphere, dx = 0.05 m: 0.44 dx with `R = dx/2`);
 /// the balanced radius holds a uniform lattice's first layer at `dx/2`.
 ///
-/// Measured in 2-D (issue 5): `R = dx/2` (the particle radius) holds every first layer at
+/// Measured in 2-D: `R = dx/2` (the particle radius) holds every first layer at
 /// 0.50 dx against eq 5's midpoint residual, and the trapezoid's mean `|grad C|` falls only
 /// 1.67x (its flat walls keep 0.35-0.40 1/m at dx = 0.02 m); [`lattice_balance_distance`]
 /// (0.437 dx) lets the airfoil's inside sink to 0.443 dx, outside the 10% band.
