@@ -924,6 +924,27 @@ pub struct Case {
     /// BIPI packing parameters.
     #[serde(default)]
     pub pack: PackSection,
+    /// Settling of a resting start before `t = 0`.
+    #[serde(default)]
+    pub settle: SettleSection,
+}
+
+/// `[settle]`: settle fluid that starts at rest into a discrete equilibrium of the case's own
+/// operators before `t = 0` ([`bisph_core::simulation::SettleParams`]).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SettleSection {
+    /// Settle before the run (fluid at rest under gravity, walls fixed).
+    #[serde(default)]
+    pub enabled: bool,
+    /// Damping rate `beta` [1/s] (default: twice the lowest sloshing frequency of the fluid,
+    /// `2 sqrt(g k tanh(k H))` with `k = pi / L`, `L` and `H` its width and depth).
+    pub damping: Option<f64>,
+    /// At rest when speeds are below `tolerance sqrt(g H)` and accelerations below
+    /// `tolerance sqrt(g H) beta` (default 1e-3).
+    pub tolerance: Option<f64>,
+    /// Most settling time [s] (default `50 / beta`).
+    pub max_time: Option<f64>,
 }
 
 /// The built-in default case: the 2-D dam break (`cases/dam-break-2d.toml`).
@@ -1507,6 +1528,7 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     check_pack(loaded)?;
     check_reliability(loaded)?;
+    crate::settle::check(loaded)?;
     for (k, p) in c.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;

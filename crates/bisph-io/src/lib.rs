@@ -23,9 +23,11 @@ pub mod regions;
 pub mod resources;
 pub mod rigid_cases;
 pub mod runner;
+pub mod settle;
 pub mod shapes;
 pub mod shepard;
 pub mod spheric2;
+pub mod still_water;
 pub mod validate;
 pub mod vtk;
 

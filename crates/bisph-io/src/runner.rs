@@ -6,6 +6,7 @@ use crate::checkpoint::{self, Checkpoint, CheckpointError, RunCounters, SimState
 use crate::diagnostics::{energy_growth, from_sim_error, Diagnosis, Watch};
 use crate::output::{at, write_atomic, Frames, OutputError, Series};
 use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
+use crate::settle::SettlingSummary;
 use bisph_core::energy::energy_scale;
 use bisph_core::walls::Motion;
 use bisph_core::Simulation;
@@ -181,9 +182,43 @@ pub struct Summary {
     pub fluid_body_energy_drift_relative: Option<f64>,
     /// Fluid particles behind a wall (inside a body or through a wall) at the end.
     pub particles_behind_walls: usize,
+    /// The settling stage before `t = 0` (absent when `[settle]` is off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settling: Option<SettlingSummary>,
     /// Why the run stopped early (absent when it reached its end).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+}
+
+/// File in the output folder holding the settling report of a fresh run (read back when the
+/// run is resumed).
+const SETTLING_FILE: &str = "settling.json";
+
+/// Settles a fresh run when the case asks for it and writes `settling.json`; a resumed run
+/// reads that report back (the checkpoint already holds the settled state).
+fn settle_or_recall<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    out: &Path,
+    resumed: bool,
+) -> Result<Option<SettlingSummary>, RunError> {
+    let path = out.join(SETTLING_FILE);
+    if resumed {
+        let Ok(text) = std::fs::read_to_string(&path) else {
+            return Ok(None);
+        };
+        return Ok(serde_json::from_str(&text).ok());
+    }
+    if path.exists() {
+        at(&path, std::fs::remove_file(&path))?;
+    }
+    let settling = crate::settle::settle(loaded, sim)
+        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
+    if let Some(s) = &settling {
+        let text = serde_json::to_string_pretty(s).expect("a settling report serialises");
+        write_atomic(&path, text.as_bytes())?;
+    }
+    Ok(settling)
 }
 
 /// Progress report for a front end.
@@ -297,6 +332,7 @@ pub fn run<V: CaseDim>(
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
+    let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some())?;
 
     let mut force_header = vec![
         "t".to_string(),
@@ -729,6 +765,7 @@ pub fn run<V: CaseDim>(
         particles_behind_walls: sim
             .walls
             .count_behind(&sim.fluid.position, sim.config.kernel.support),
+        settling,
         stopped: match (&trip, interrupted) {
             (Some(d), _) => Some(d.to_string()),
             (None, true) => Some("interrupted by a signal; resume with --resume".into()),

@@ -141,6 +141,7 @@ pub fn registry() -> Vec<Box<dyn ValidationCase>> {
     cases.extend(crate::paper3_flow_cases::cases());
     cases.extend(crate::pack_cases::cases());
     cases.extend(crate::rigid_cases::cases());
+    cases.extend(crate::still_water::cases());
     cases
 }
 

@@ -217,6 +217,16 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
                 s.energy_drift_relative,
                 out.display()
             );
+            if let Some(settling) = &s.settling {
+                println!(
+                    "settling before t = 0: {} after {:.3} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(g H)",
+                    settling.outcome,
+                    settling.time,
+                    settling.steps,
+                    settling.wall_seconds,
+                    settling.max_speed_relative
+                );
+            }
             Ok(())
         }
         Err(e @ RunError::Stopped(_)) => Err((

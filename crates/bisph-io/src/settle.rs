@@ -1,0 +1,168 @@
+//! `[settle]`: from the case to the settling parameters, the checks that settling applies,
+//! and what `summary.json` reports of it.
+
+use crate::case::{CaseError, LoadedCase};
+use bisph_core::simulation::{SettleOutcome, SettleParams, SettleReport};
+use bisph_core::{Simulation, Vector};
+use serde::{Deserialize, Serialize};
+
+/// Default tolerance of `settle.tolerance`.
+pub const DEFAULT_TOLERANCE: f64 = 1e-3;
+
+/// Settling time over `1 / beta` when `settle.max_time` is left out.
+const DEFAULT_MAX_TIME_BETA: f64 = 50.0;
+
+/// Kinetic energy over `M g H` above which the fluid counts as flowing.
+const FLOW_KINETIC: f64 = 1e-3;
+
+/// What `summary.json` (key `settling`) and `settling.json` report of the settling stage.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SettlingSummary {
+    /// `"settled"`, `"timed_out"` (the run starts from the state reached, at rest) or
+    /// `"not_at_rest"` (the fluid flows or the scheme is unstable: the original start is kept).
+    pub outcome: String,
+    /// Settling steps.
+    pub steps: u64,
+    /// Settling time [s].
+    pub time: f64,
+    /// Wall-clock seconds spent settling.
+    pub wall_seconds: f64,
+    /// Damping rate used [1/s].
+    pub damping: f64,
+    /// Largest speed at the end of settling [m/s].
+    pub max_speed: f64,
+    /// The same over `sqrt(g H)`.
+    pub max_speed_relative: f64,
+    /// Largest acceleration at the end of settling [m/s^2].
+    pub max_acceleration: f64,
+    /// Farthest a particle moved from its start [m].
+    pub max_displacement: f64,
+}
+
+impl SettlingSummary {
+    fn new(report: &SettleReport, params: &SettleParams) -> Self {
+        SettlingSummary {
+            outcome: match report.outcome {
+                SettleOutcome::Settled => "settled",
+                SettleOutcome::TimedOut => "timed_out",
+                SettleOutcome::NotAtRest => "not_at_rest",
+            }
+            .into(),
+            steps: report.steps,
+            time: report.time,
+            wall_seconds: report.wall_seconds,
+            damping: params.damping,
+            max_speed: report.max_speed,
+            max_speed_relative: report.max_speed / params.speed_scale,
+            max_acceleration: report.max_acceleration,
+            max_displacement: report.max_displacement,
+        }
+    }
+}
+
+/// Checks `[settle]`: positive numbers, and, when enabled, a case that starts at rest under
+/// gravity with fixed walls and no driving force.
+pub fn check(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let s = &c.settle;
+    for (key, value) in [
+        ("settle.damping", s.damping),
+        ("settle.tolerance", s.tolerance),
+        ("settle.max_time", s.max_time),
+    ] {
+        if let Some(v) = value {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(loaded.error(key, format!("expected a positive number, found {v}")));
+            }
+        }
+    }
+    if !s.enabled {
+        return Ok(());
+    }
+    let refuse = |why: String| {
+        Err(loaded.error(
+            "settle.enabled",
+            format!("settling needs fluid at rest under gravity with fixed walls: {why}"),
+        ))
+    };
+    if c.fluid.gravity.iter().all(|&g| g == 0.0) {
+        return refuse("the case has no gravity".into());
+    }
+    if c.flux.is_some() {
+        return refuse("the case has a flux-driving force ([flux])".into());
+    }
+    for (k, block) in c.fluid_block.iter().enumerate() {
+        if let Some(v) = &block.velocity {
+            if v.iter().any(|&x| x != 0.0) {
+                return refuse(format!("fluid_block[{k}].velocity is not zero"));
+            }
+        }
+    }
+    for (k, body) in c.body.iter().enumerate() {
+        if body.motion.is_some() || body.piston.is_some() || body.free.is_some() {
+            return refuse(format!("body[{k}] (\"{}\") moves", body.name));
+        }
+    }
+    Ok(())
+}
+
+/// The settling parameters of a built simulation (`None` when `[settle]` is off).
+pub fn params<V: Vector>(loaded: &LoadedCase, sim: &Simulation<V>) -> Option<SettleParams> {
+    let s = &loaded.case.settle;
+    if !s.enabled {
+        return None;
+    }
+    let gravity = sim.config.gravity;
+    let g = gravity.length();
+    // Particle centres lie half a spacing inside the water.
+    let (depth, width) = fluid_extent(&sim.fluid.position, gravity);
+    let depth = depth + sim.config.particle_spacing;
+    let width = width + sim.config.particle_spacing;
+    // Lowest sloshing mode of water of this width and depth: omega^2 = g k tanh(k H).
+    let k = std::f64::consts::PI / width;
+    let omega = (g * k * (k * depth).tanh()).sqrt();
+    let damping = s.damping.unwrap_or(2.0 * omega);
+    let mass: f64 = sim.fluid.mass.iter().sum();
+    Some(SettleParams {
+        damping,
+        speed_scale: (g * depth).sqrt(),
+        speed_tolerance: s.tolerance.unwrap_or(DEFAULT_TOLERANCE),
+        acceleration_tolerance: s.tolerance.unwrap_or(DEFAULT_TOLERANCE),
+        max_time: s.max_time.unwrap_or(DEFAULT_MAX_TIME_BETA / damping),
+        max_kinetic: FLOW_KINETIC * mass * g * depth,
+    })
+}
+
+/// Settles a fresh simulation when the case asks for it; returns what `summary.json` reports.
+pub fn settle<V: Vector>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
+    let Some(params) = params(loaded, sim) else {
+        return Ok(None);
+    };
+    let report = sim.settle(&params)?;
+    Ok(Some(SettlingSummary::new(&report, &params)))
+}
+
+/// Depth (extent along `g`) and width (largest extent along a coordinate axis across `g`) of
+/// the particles.
+fn fluid_extent<V: Vector>(points: &[V], gravity: V) -> (f64, f64) {
+    let g = gravity.length();
+    let down = gravity / g;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let first = points.first().copied().unwrap_or(V::ZERO);
+    let (mut min, mut max) = (first, first);
+    for &r in points {
+        let height = -down.dot(r);
+        lo = lo.min(height);
+        hi = hi.max(height);
+        min = min.min_by_component(r);
+        max = max.max_by_component(r);
+    }
+    let width = (0..V::DIM)
+        .filter(|&k| down.get(k).abs() < 0.5)
+        .map(|k| max.get(k) - min.get(k))
+        .fold(0.0, f64::max);
+    (hi - lo, width)
+}
