@@ -4,11 +4,24 @@
 //! [`glam::DVec3`]. The command line picks the dimension once (`match case.dim`) and the
 //! whole solver is monomorphised for it; `V::DIM` branches are constant-folded.
 
-use crate::kernel::Wendland;
-use crate::walls::{geometric_shepard, BoundaryElements};
 use glam::{DVec2, DVec3};
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub, SubAssign};
+
+/// A slice of vectors as its concrete type ([`Vector::as_concrete`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Concrete<'a> {
+    /// Two-dimensional vectors.
+    Two(&'a [DVec2]),
+    /// Three-dimensional vectors.
+    Three(&'a [DVec3]),
+}
+
+/// The first two components of `v`, for code that runs in 2-D only.
+#[inline(always)]
+pub fn xy<V: Vector>(v: V) -> DVec2 {
+    DVec2::new(v.get(0), v.get(1))
+}
 
 /// A small f64 vector of dimension 2 or 3.
 pub trait Vector:
@@ -81,24 +94,10 @@ pub trait Vector:
     fn angular_from_slice(values: &[f64]) -> Self::Angular;
     /// Angular quantity as a list (for output): 1 entry in 2-D, 3 in 3-D.
     fn angular_to_vec(a: Self::Angular) -> Vec<f64>;
-    /// Contribution of one wall element (its corners, outward normal and area) to the
-    /// geometric Shepard factor at `x`, `gamma(x) - 1` (see [`crate::walls::geometric_shepard`]).
-    fn wall_gamma_contribution(
-        kernel: &Wendland,
-        x: Self,
-        corners: &[Self],
-        normal: Self,
-        area: f64,
-    ) -> f64;
-    /// Contribution of one piece of a [`geometric_shepard::GammaCache`] (2-D: a segment;
-    /// 3-D: a planar region by its outline edges) to `gamma(x) - 1`.
-    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64;
-    /// Fills `cache` with the pieces of the current `elements` (merged where they continue
-    /// one straight wall or plane).
-    fn merge_gamma_pieces(
-        elements: &BoundaryElements<Self>,
-        cache: &mut geometric_shepard::GammaCache<Self>,
-    );
+    /// The vectors as their concrete type. Code with one form per dimension (a closed form
+    /// in 2-D, a polygon rule in 3-D) is reached from generic code through it; the match on
+    /// the result is resolved when the solver is monomorphised.
+    fn as_concrete(values: &[Self]) -> Concrete<'_>;
 }
 
 impl Vector for DVec2 {
@@ -146,24 +145,9 @@ impl Vector for DVec2 {
     fn angular_to_vec(a: f64) -> Vec<f64> {
         vec![a]
     }
-    fn wall_gamma_contribution(
-        kernel: &Wendland,
-        x: Self,
-        corners: &[Self],
-        normal: Self,
-        _area: f64,
-    ) -> f64 {
-        geometric_shepard::segment_contribution(kernel, x, corners[0], corners[1], normal)
-    }
     #[inline(always)]
-    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
-        geometric_shepard::segment_contribution(kernel, x, corners[0], corners[1], normal)
-    }
-    fn merge_gamma_pieces(
-        elements: &BoundaryElements<Self>,
-        cache: &mut geometric_shepard::GammaCache<Self>,
-    ) {
-        geometric_shepard::merge_segments(elements, cache);
+    fn as_concrete(values: &[Self]) -> Concrete<'_> {
+        Concrete::Two(values)
     }
 }
 
@@ -215,24 +199,9 @@ impl Vector for DVec3 {
     fn angular_to_vec(a: DVec3) -> Vec<f64> {
         vec![a.x, a.y, a.z]
     }
-    fn wall_gamma_contribution(
-        kernel: &Wendland,
-        x: Self,
-        corners: &[Self],
-        normal: Self,
-        area: f64,
-    ) -> f64 {
-        geometric_shepard::patch_contribution(kernel, x, corners, normal, area)
-    }
     #[inline(always)]
-    fn piece_gamma_contribution(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
-        geometric_shepard::face_contribution(kernel, x, corners, normal)
-    }
-    fn merge_gamma_pieces(
-        elements: &BoundaryElements<Self>,
-        cache: &mut geometric_shepard::GammaCache<Self>,
-    ) {
-        geometric_shepard::merge_faces(elements, cache);
+    fn as_concrete(values: &[Self]) -> Concrete<'_> {
+        Concrete::Three(values)
     }
 }
 

@@ -10,6 +10,7 @@
 //! 4. Boregowda & Liu, BIPI particle initialisation.
 #![deny(missing_docs)]
 
+pub mod bi;
 pub mod dim;
 pub mod energy;
 pub mod eos;

@@ -4,8 +4,8 @@
 //! point-in-region queries (a point on the boundary is outside) that are exact on vertices
 //! and edges.
 
+use crate::bi::segment::{point_segment_distance, segments_intersect};
 use crate::geometry::{check_edges, polyline_elements, signed_area, EdgeFault, ElementShape};
-use crate::packing::integrals::segments_intersect;
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 
@@ -183,7 +183,7 @@ impl PolygonRegion {
     /// Distance from `p` to the nearest boundary edge.
     pub fn boundary_distance(&self, p: DVec2) -> f64 {
         self.edges()
-            .map(|(a, b)| crate::packing::integrals::point_segment_distance(p, a, b))
+            .map(|(a, b)| point_segment_distance(p, a, b))
             .fold(f64::INFINITY, f64::min)
     }
 

@@ -3,9 +3,9 @@
 use crate::case::ToleranceReference;
 use crate::case::{Case, CaseError, FluidBlock, InitialPressure, LoadedCase, WallSpec};
 use crate::regions::BlockRegion;
+use bisph_core::bi::ElementIntegrals as WallIntegrals;
 use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::{self, ElementShape};
-use bisph_core::packing::WallIntegrals;
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};

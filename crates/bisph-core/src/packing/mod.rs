@@ -6,7 +6,7 @@
 //! * `<C_a> = sum_b V_b W_ab / gamma_a` (paper 4, eq 4) and
 //!   `<grad C_a> = (sum_b V_b grad_a W_ab - sum_s grad gamma_as) / gamma_a` (eq 5), with the
 //!   exact Shepard factor `gamma_a` and exact element integrals `grad gamma_as`
-//!   ([`integrals`]);
+//!   ([`crate::bi`]);
 //! * the shift `dx_a = -D (grad C_a - B_a)` with `D = 0.5 h^2` and the boundary push
 //!   `B_a = sum_s grad gamma_as(r_push) / (2 gamma_a)` (eq 14 with `p_s = 2 p_a`), where the
 //!   push integrates only the part of the wall within `r_push` of the particle: the "ramp" of
@@ -30,14 +30,12 @@
 //! A particle never crosses a wall: a shift whose path touches an element is halved until it
 //! does not (or dropped). Sums gather per particle, so results do not depend on threads.
 
-pub mod integrals;
-
+use crate::bi::ElementIntegrals;
 use crate::dim::Vector;
 use crate::geometry::ElementShape;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::walls::BoundaryElements;
-pub use integrals::WallIntegrals;
 use rayon::prelude::*;
 
 /// Parameters of BIPI; lengths in units of `dx` unless said otherwise.
@@ -166,7 +164,7 @@ pub struct PackWalls<V: Vector> {
     grid: CellGrid<V>,
 }
 
-impl<V: WallIntegrals> PackWalls<V> {
+impl<V: ElementIntegrals> PackWalls<V> {
     /// Walls from element shapes, for a kernel of support `support`.
     pub fn new(shapes: &[ElementShape<V>], support: f64) -> Self {
         let mut elements = BoundaryElements::default();
@@ -209,12 +207,11 @@ impl<V: WallIntegrals> PackWalls<V> {
             if d <= 1e-9 * kernel.h {
                 on_wall = Some(e.normal[j]);
             }
-            let (g, w) = V::element_gamma_and_integral(kernel, x, corners, e.normal[j]);
+            let (g, w) = V::shepard_and_kernel_integral(kernel, x, corners, e.normal[j]);
             s.gamma += g;
             s.grad_gamma -= e.normal[j] * w;
             if d < push_radius {
-                s.push +=
-                    integrals::element_grad_gamma(kernel, x, corners, e.normal[j], push_radius);
+                s.push += V::grad_gamma(kernel, x, corners, e.normal[j], push_radius);
             }
         });
         if let Some(n) = on_wall {
@@ -222,7 +219,7 @@ impl<V: WallIntegrals> PackWalls<V> {
             s.gamma = 1.0;
             self.grid.for_each_candidate(x_eval, |j| {
                 if (e.centre[j] - x_eval).length() < support + e.reach[j] {
-                    s.gamma += V::element_gamma(kernel, x_eval, e.current_corners(j), e.normal[j]);
+                    s.gamma += V::polar_shepard(kernel, x_eval, e.current_corners(j), e.normal[j]);
                 }
             });
         }
@@ -286,7 +283,7 @@ struct Evaluation<V> {
 
 /// The state of a BIPI run.
 #[derive(Debug)]
-pub struct Packer<V: WallIntegrals> {
+pub struct Packer<V: ElementIntegrals> {
     /// Parameters.
     pub params: PackParams,
     /// Kernel.
@@ -336,7 +333,7 @@ pub enum PackError {
     },
 }
 
-impl<V: WallIntegrals> Packer<V> {
+impl<V: ElementIntegrals> Packer<V> {
     /// A packer for the lattice `positions` bounded by `walls` (normals out of the region).
     pub fn new(
         params: PackParams,
@@ -679,7 +676,7 @@ impl<V: WallIntegrals> Packer<V> {
 /// 0.50 dx against eq 5's midpoint residual, and the trapezoid's mean `|grad C|` falls only
 /// 1.67x (its flat walls keep 0.35-0.40 1/m at dx = 0.02 m); [`lattice_balance_distance`]
 /// (0.437 dx) lets the airfoil's inside sink to 0.443 dx, outside the 10% band.
-pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+pub fn default_push_radius<V: ElementIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     if V::DIM == 2 {
         relaxed_balance_distance::<V>(kernel, dx)
     } else {
@@ -692,7 +689,7 @@ pub fn default_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 
 /// lattice (square in 2-D, cubic in 3-D) whose layers lie at `d + k dx`, `k >= 0`, evaluated
 /// at a particle of that first layer: the wall's corners, the particle, its `gamma` and
 /// `grad C . n_in`.
-fn half_lattice_first_layer<V: WallIntegrals>(
+fn half_lattice_first_layer<V: ElementIntegrals>(
     kernel: &Wendland,
     dx: f64,
     d: f64,
@@ -705,7 +702,7 @@ fn half_lattice_first_layer<V: WallIntegrals>(
 /// As [`half_lattice_first_layer`] for a half lattice whose layers (each a uniform square row
 /// or sheet of spacing `dx`, aligned with the others) lie at the wall distances `layers`,
 /// evaluated at a particle of layer `i`.
-fn half_lattice_layer<V: WallIntegrals>(
+fn half_lattice_layer<V: ElementIntegrals>(
     kernel: &Wendland,
     dx: f64,
     layers: &[f64],
@@ -757,7 +754,7 @@ fn half_lattice_layer<V: WallIntegrals>(
         }
     }
     let (gamma, w) = if layers[i] < support {
-        let (g, w) = V::element_gamma_and_integral(kernel, xa, &corners, normal);
+        let (g, w) = V::shepard_and_kernel_integral(kernel, xa, &corners, normal);
         (1.0 + g, w)
     } else {
         (1.0, 0.0)
@@ -778,7 +775,7 @@ fn half_lattice_layer<V: WallIntegrals>(
 /// layers moves it out slowly (a uniform strain of the free layers costs no `grad C`: 0.4729
 /// with 6 free layers, 0.4746 with 30, at `h = 2 dx`). The free layers move by the shift of
 /// eq 12 (capped at 0.02 dx) until `|grad C| dx < 1e-11` on each (about 100 iterations).
-pub fn relaxed_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+pub fn relaxed_balance_distance<V: ElementIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     // The layers whose kernel the wall truncates, (k + 1/2) dx < support: those step 2a moves.
     let truncated = (0..)
         .take_while(|&k| (k as f64 + 0.5) * dx < kernel.support)
@@ -787,7 +784,7 @@ pub fn relaxed_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) ->
 }
 
 /// The first-layer distance of [`relaxed_balance_distance`] with `free` free layers.
-fn relaxed_layers<V: WallIntegrals>(kernel: &Wendland, dx: f64, free: usize) -> f64 {
+fn relaxed_layers<V: ElementIntegrals>(kernel: &Wendland, dx: f64, free: usize) -> f64 {
     let reach = (kernel.support / dx - 1e-9).ceil() as usize;
     let mut layers: Vec<f64> = (0..free + reach + 2)
         .map(|k| (k as f64 + 0.5) * dx)
@@ -814,7 +811,7 @@ fn relaxed_layers<V: WallIntegrals>(kernel: &Wendland, dx: f64, free: usize) -> 
 /// midpoint rule of `gamma`'s volume integral, so `d` is not `dx/2`: about `0.44 dx` at
 /// `h = 2 dx` in 2-D. Bisection on `[0.25, 0.75] dx` (`grad C . n_in` grows with `d` there);
 /// `1/2` if it has no root there.
-pub fn lattice_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+pub fn lattice_balance_distance<V: ElementIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     let f = |d: f64| half_lattice_first_layer::<V>(kernel, dx, d).3;
     let (mut lo, mut hi) = (0.25 * dx, 0.75 * dx);
     if f(lo) > 0.0 || f(hi) < 0.0 {
@@ -843,10 +840,10 @@ pub fn lattice_balance_distance<V: WallIntegrals>(kernel: &Wendland, dx: f64) ->
 /// `2 sqrt(R^2 - d^2)` makes the ramp steep, but well inside in 3-D, where the disc
 /// `pi (R^2 - d^2)` makes it flat. Depends only on the kernel and `h / dx`; at least `1/2`, at
 /// most the support.
-pub fn balanced_push_radius<V: WallIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
+pub fn balanced_push_radius<V: ElementIntegrals>(kernel: &Wendland, dx: f64) -> f64 {
     let support = kernel.support;
     let (corners, xa, gamma, gradc) = half_lattice_first_layer::<V>(kernel, dx, 0.5 * dx);
-    let push = |r: f64| V::element_kernel_integral(kernel, xa, &corners, r) / (2.0 * gamma);
+    let push = |r: f64| V::kernel_integral(kernel, xa, &corners, r) / (2.0 * gamma);
     let (mut lo, mut hi) = (0.5 * dx, support);
     if gradc <= 0.0 {
         return 0.5;

@@ -14,7 +14,8 @@
 
 use super::usaw::grad_gamma;
 use super::BoundaryElements;
-use crate::dim::Vector;
+use crate::bi::segment::point_segment_distance;
+use crate::dim::{xy, Vector};
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::quadrature::adaptive_gauss_legendre;
@@ -37,22 +38,6 @@ pub struct PathGamma {
 /// Directions tried, after the direction of `grad gamma` at the point, when that one is
 /// blocked by a wall (a thin wall, a narrow gap) or undefined (`grad gamma = 0`).
 const FALLBACK_DIRECTIONS: usize = 64;
-
-fn to2<V: Vector>(v: V) -> DVec2 {
-    DVec2::new(v.get(0), v.get(1))
-}
-
-/// Distance from `p` to the segment `a -> b`.
-fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let d = b - a;
-    let len2 = d.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(d) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (a + d * t - p).length()
-}
 
 /// Parameter `t` in `[0, 1]` where the path `p -> q` meets the segment `a -> b`, if it does
 /// (touching counts; parallel overlapping segments meet at their first common point).
@@ -91,7 +76,7 @@ fn segments_near<V: Vector>(
         |j| {
             let c = elements.current_corners(j);
             if c.len() == 2 {
-                visit(to2(c[0]), to2(c[1]), to2(elements.normal[j]));
+                visit(xy(c[0]), xy(c[1]), xy(elements.normal[j]));
             }
         },
     );
@@ -112,7 +97,7 @@ fn free_path_length<V: Vector>(
     // Leaving a wall the point lies on: only into the fluid.
     let mut ok = true;
     segments_near(x, on_wall, elements, grid, |a, b, n| {
-        if segment_distance(x, a, b) <= on_wall && d.dot(n) >= 0.0 {
+        if point_segment_distance(x, a, b) <= on_wall && d.dot(n) >= 0.0 {
             ok = false;
         }
     });
@@ -138,7 +123,7 @@ fn free_path_length<V: Vector>(
                         blocked = true;
                     }
                 }
-                if segment_distance(q, a, b) < kernel.support {
+                if point_segment_distance(q, a, b) < kernel.support {
                     near = true;
                 }
             },
@@ -172,10 +157,10 @@ pub fn gamma_by_path<V: Vector>(
                 .into(),
         );
     }
-    let xp = to2(x);
+    let xp = xy(x);
     let mut near = false;
     segments_near(xp, kernel.support, elements, grid, |a, b, _| {
-        near |= segment_distance(xp, a, b) < kernel.support;
+        near |= point_segment_distance(xp, a, b) < kernel.support;
     });
     if !near {
         return Ok(PathGamma {
@@ -185,7 +170,7 @@ pub fn gamma_by_path<V: Vector>(
             evaluations: 0,
         });
     }
-    let g = to2(grad_gamma(kernel, x, elements, grid));
+    let g = xy(grad_gamma(kernel, x, elements, grid));
     let mut candidates = Vec::with_capacity(FALLBACK_DIRECTIONS + 1);
     if g.length() * kernel.h > 1e-12 {
         candidates.push(g.normalize());
@@ -207,7 +192,7 @@ pub fn gamma_by_path<V: Vector>(
     let mut slope = |s: f64| {
         evaluations += 1;
         let p = xp + direction * s;
-        to2(grad_gamma(
+        xy(grad_gamma(
             kernel,
             V::from_slice(&[p.x, p.y]),
             elements,

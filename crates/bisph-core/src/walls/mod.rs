@@ -6,6 +6,7 @@
 pub mod bodies;
 pub mod bounce;
 pub mod energy_bi;
+pub mod gamma_cache;
 pub mod geometric_shepard;
 pub mod integrated_shepard;
 pub mod shepard_bi;
@@ -15,7 +16,7 @@ use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
-use crate::terms::Viscosity;
+use crate::terms::viscosity::Viscosity;
 pub use bodies::{Body, Coupling, FreeBody, Kinematics, Motion, Piston, PrescribedMotion};
 use glam::DVec3;
 
@@ -56,7 +57,7 @@ pub struct BoundaryElements<V: Vector> {
     pub corners: Vec<V>,
     /// Merged wall pieces and per-cell candidate lists for the geometric Shepard factor
     /// (empty until [`Walls::prepare_gamma`]; rebuilt whenever the walls are placed).
-    pub gamma_cache: geometric_shepard::GammaCache<V>,
+    pub gamma_cache: gamma_cache::GammaCache<V>,
 }
 
 impl<V: Vector> BoundaryElements<V> {
@@ -103,6 +104,20 @@ impl<V: Vector> BoundaryElements<V> {
     /// Current corner points of element `j`.
     pub fn current_corners(&self, j: usize) -> &[V] {
         &self.corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize]
+    }
+
+    /// The current geometry of the elements, borrowed (what a [`gamma_cache::GammaCache`] is
+    /// built from).
+    pub fn geometry(&self) -> gamma_cache::ElementGeometry<'_, V> {
+        gamma_cache::ElementGeometry {
+            corners: &self.corners,
+            corner_start: &self.corner_start,
+            normal: &self.normal,
+            area: &self.area,
+            centre: &self.centre,
+            reach: &self.reach,
+            max_reach: self.max_reach,
+        }
     }
 }
 
@@ -196,12 +211,12 @@ impl<V: Vector> Walls<V> {
         self.refresh_gamma();
     }
 
-    /// Builds the geometric-gamma cache ([`geometric_shepard::GammaCache`]) for kernel
+    /// Builds the geometric-gamma cache ([`gamma_cache::GammaCache`]) for kernel
     /// support `support` from the current element positions; [`Walls::move_to`] keeps it up
     /// to date from then on.
     pub fn prepare_gamma(&mut self, support: f64) {
         let mut cache = std::mem::take(&mut self.elements.gamma_cache);
-        cache.rebuild(&self.elements, support, self.periodicity);
+        cache.rebuild(self.elements.geometry(), support, self.periodicity);
         self.elements.gamma_cache = cache;
     }
 

@@ -5,8 +5,8 @@
 //! (element normals out of the fluid, [`super`]) and converts here:
 //! `grad gamma_as = -n_s int_s W(|x_a - y|) dy` (paper 3, eq 9) points into the fluid.
 //!
-//! - [`segment_kernel_integral`]: `int_s W` in closed form for the Wendland kernel, the
-//!   segment clipped to the support circle first.
+//! - `int_s W`: in closed form for the Wendland kernel, the segment clipped to the support
+//!   circle first ([`crate::bi::segment::segment_kernel_integral`]).
 //! - [`grad_gamma`]: `grad gamma_a = sum_s grad gamma_as` (eq 10).
 //! - Integrated gamma (eq 4): `gamma^{n+1} = gamma^n + (grad gamma^n + grad gamma^{n+1})/2 .
 //!   (r^{n+1} - r^n)` (trapezoidal line integral along the displacement, fixed walls), with the
@@ -21,71 +21,19 @@
 //!   divided by `gamma_a`.
 
 use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
-use crate::dim::Vector;
+use crate::bi::segment::segment_kernel_integral;
+use crate::dim::{xy, Vector};
 use crate::eos::Eos;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
-use crate::walls::geometric_shepard::radial_moments;
-use glam::DVec2;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// `int_s W(|x - y|) dy` over the segment `p0 -> p1` (2-D Wendland), exact.
-///
-/// With `q0` the distance from `x` to the segment's line and `tau` the offset along it (both
-/// in units of `h`), `W = 7/(4 pi h^2) (1 - 5q^2/2 + 5q^3/2 - 15q^4/16 + q^5/8)` for `q < 2`, so
-/// after clipping `tau` to `|tau| <= sqrt(4 - q0^2)` the integral is a sum of the moments
-/// `int (q0^2 + tau^2)^(k/2) dtau` in closed form.
-pub fn segment_kernel_integral(kernel: &Wendland, x: DVec2, p0: DVec2, p1: DVec2) -> f64 {
-    let h = kernel.h;
-    let d = p1 - p0;
-    let length = d.length();
-    if length == 0.0 {
-        return 0.0;
-    }
-    let t = d / length;
-    let rel0 = p0 - x;
-    let q0 = (rel0.x * t.y - rel0.y * t.x).abs() / h;
-    let half_chord2 = 4.0 - q0 * q0;
-    if half_chord2 <= 0.0 {
-        return 0.0;
-    }
-    let half_chord = half_chord2.sqrt();
-    let tau0 = rel0.dot(t) / h;
-    let tau1 = (p1 - x).dot(t) / h;
-    let (u0, u1) = (tau0.max(-half_chord), tau1.min(half_chord));
-    if u0 >= u1 {
-        return 0.0;
-    }
-    let m1 = radial_moments(q0, u1);
-    let m0 = radial_moments(q0, u0);
-    let i = |k: usize| m1[k] - m0[k];
-    // moments are [I0, I2, I3, I4, I5]
-    let poly = i(0) - 2.5 * i(1) + 2.5 * i(2) - 15.0 / 16.0 * i(3) + 0.125 * i(4);
-    7.0 / (4.0 * PI * h) * poly
-}
-
-/// `grad gamma_as` of one segment (paper 3, eq 9): `-n_out int_s W`, pointing into the fluid.
-pub fn segment_grad_gamma(
-    kernel: &Wendland,
-    x: DVec2,
-    p0: DVec2,
-    p1: DVec2,
-    n_out: DVec2,
-) -> DVec2 {
-    -n_out * segment_kernel_integral(kernel, x, p0, p1)
-}
-
-/// Converts a 2-D vector of the generic type.
+/// `grad gamma_as` of element `j` for a particle at `x` (paper 3, eq 9), `-n_s int_s W`, the
+/// exact segment integral of [`crate::bi::segment`]; 2-D only (zero in 3-D and for other elements).
 #[inline(always)]
-fn to2<V: Vector>(v: V) -> DVec2 {
-    DVec2::new(v.get(0), v.get(1))
-}
-
-/// `grad gamma_as` of element `j` for a particle at `x` (2-D only; zero in 3-D).
-#[inline(always)]
-pub fn element_grad_gamma<V: Vector>(
+fn segment_grad_gamma<V: Vector>(
     kernel: &Wendland,
     x: V,
     elements: &BoundaryElements<V>,
@@ -98,13 +46,8 @@ pub fn element_grad_gamma<V: Vector>(
     if c.len() != 2 {
         return V::ZERO;
     }
-    let g = segment_grad_gamma(
-        kernel,
-        to2(x),
-        to2(c[0]),
-        to2(c[1]),
-        to2(elements.normal[j]),
-    );
+    let integral = segment_kernel_integral(kernel, xy(x), xy(c[0]), xy(c[1]), kernel.support);
+    let g = -xy(elements.normal[j]) * integral;
     V::from_slice(&[g.x, g.y])
 }
 
@@ -120,7 +63,7 @@ pub fn grad_gamma<V: Vector>(
     let mut sum = V::ZERO;
     let radius = kernel.support + elements.max_reach;
     grid.for_each_candidate_within_shifted(x, radius, |j, image| {
-        sum += element_grad_gamma(kernel, x - image, elements, j);
+        sum += segment_grad_gamma(kernel, x - image, elements, j);
     });
     sum
 }
@@ -227,7 +170,7 @@ impl<V: Vector> Vertices<V> {
             // turn between the inward normals when the corner is concave (the far end of one
             // segment lies on the fluid side of the other), pi plus it when convex.
             let theta = if adj.len() == 2 {
-                let (a, b) = (to2(adj[0].0), to2(adj[1].0));
+                let (a, b) = (xy(adj[0].0), xy(adj[1].0));
                 let turn = a.perp_dot(b).atan2(a.dot(b)).abs();
                 let far = period
                     .minimum_image(v.position[adj[0].1] - v.position[id])
@@ -420,7 +363,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         // Segments (at the image next to the particle on periodic axes).
         let radius = kernel.support + elements.max_reach;
         grid.for_each_candidate_within_shifted(a.x, radius, |j, image| {
-            let gg = element_grad_gamma(kernel, a.x - image, elements, j);
+            let gg = segment_grad_gamma(kernel, a.x - image, elements, j);
             if gg == V::ZERO {
                 return;
             }
@@ -722,66 +665,8 @@ fn shift_until_still<V: Vector>(
 mod tests {
     use super::*;
     use crate::geometry::box_elements_2d;
-    use crate::quadrature::gauss_legendre;
     use crate::walls::geometric_shepard;
-
-    /// Independent reference: composite Gauss-Legendre over the part of the segment inside the
-    /// support, split at the foot of the perpendicular (where `W` has a kink for `q0 = 0`).
-    fn reference_integral(kernel: &Wendland, x: DVec2, p0: DVec2, p1: DVec2) -> f64 {
-        let d = p1 - p0;
-        let len = d.length();
-        let t = d / len;
-        let s_foot = (x - p0).dot(t);
-        let dist = ((x - p0) - t * s_foot).length();
-        let rb = kernel.support * kernel.support - dist * dist;
-        if rb <= 0.0 {
-            return 0.0;
-        }
-        let half = rb.sqrt();
-        let (a, b) = ((s_foot - half).max(0.0), (s_foot + half).min(len));
-        if a >= b {
-            return 0.0;
-        }
-        let f = |s: f64| kernel.value((p0 + t * s - x).length());
-        if s_foot > a && s_foot < b {
-            gauss_legendre(a, s_foot, 64, f) + gauss_legendre(s_foot, b, 64, f)
-        } else {
-            gauss_legendre(a, b, 64, f)
-        }
-    }
-
-    #[test]
-    fn segment_integral_matches_quadrature_to_round_off() {
-        let kernel = Wendland::new(0.1, 2);
-        let mut worst: f64 = 0.0;
-        for &(x, y) in &[
-            (0.0, 0.0),
-            (0.03, 0.0),
-            (0.05, 0.07),
-            (-0.13, 0.02),
-            (0.31, -0.05),
-            (0.1, 0.1999),
-            (0.12, 0.001),
-        ] {
-            for &(p0, p1) in &[
-                (DVec2::new(-0.05, 0.0), DVec2::new(0.05, 0.0)),
-                (DVec2::new(-1.0, 0.0), DVec2::new(1.0, 0.0)),
-                (DVec2::new(0.0, -0.03), DVec2::new(0.11, 0.08)),
-                (DVec2::new(0.2, 0.0), DVec2::new(0.25, 0.0)),
-            ] {
-                let x = DVec2::new(x, y);
-                let exact = segment_kernel_integral(&kernel, x, p0, p1);
-                let reference = reference_integral(&kernel, x, p0, p1);
-                worst = worst.max((exact - reference).abs());
-                // Reversed orientation gives the same integral.
-                let back = segment_kernel_integral(&kernel, x, p1, p0);
-                assert!((back - exact).abs() < 1e-13);
-            }
-        }
-        // W ~ 5.6e1 / h, lengths ~ h: 1e-12 absolute is round-off here.
-        eprintln!("segment int W: closed form vs Gauss-Legendre, max |diff| = {worst:e}");
-        assert!(worst < 1e-12, "worst {worst:e}");
-    }
+    use glam::DVec2;
 
     #[test]
     fn polygon_sum_is_the_gradient_of_the_area_gamma() {

@@ -1,156 +1,17 @@
-//! Boundary integrals of one wall element at a point, as BIPI needs them (paper 4, eqs 3-5).
+//! 3-D triangles by the polar rule: `int_{T cap B(x, R)} f(|y - x|) dA` in polar coordinates
+//! about the foot of the perpendicular from `x`, for the kernel `W` (paper 4, eq 3) and the
+//! Shepard function `F` (paper 2, eqs 8-9) at once.
 //!
-//! With normals `n` **out of the fluid** (the code's convention), the gradient of the
-//! Shepard factor `gamma(x) = int_Omega W(x - y) dy` is the surface integral
-//! `grad gamma(x) = -sum_s n_s int_{S_s} W(|y - x|) dS` (divergence theorem), so each element
-//! contributes `grad gamma_as = -n_s int_{S_s} W dS` (paper 4, eq 3; it points into the fluid).
-//!
-//! * 2-D: segments, integrated in closed form. `W(q) = alpha w(q)` with
-//!   `w = 1 - 5q^2/2 + 5q^3/2 - 15q^4/16 + q^5/8`, a polynomial in `q = sqrt(a^2 + u^2)`
-//!   along the segment, so the integral is a
-//!   sum of the moments `int (a^2 + u^2)^(k/2) du` over the part of the segment inside the
-//!   clipping circle (the support, or the push radius).
-//! * 3-D: planar polygons (triangles; quadrilaterals are split in two), integrated in polar
-//!   coordinates about the foot of the perpendicular from the point. The radial integral is
-//!   exact (`int W(sqrt(a^2 + s^2)) s ds = int W(r) r dr`, a polynomial), the angular one is
-//!   Gauss-Legendre over pieces split where the edge meets the clipping circle, on which the
-//!   integrand is smooth: converged to about 1e-9 relative (1e-12 on flat walls).
-//!
-//! The 3-D Shepard factor uses the same polar rule on paper 2's `F(q)` (eq 9):
-//! `gamma = 1 + sum_s ((c_s - x) . n_s) int_{S_s} F(|y - x|) dS`, with the corrected sign of
-//! the polynomial part stated in the design brief.
+//! The radial integral is exact (`int f(sqrt(a^2 + s^2)) s ds = int f(r) r dr`, a
+//! polynomial plus, for `F`, the point-source term), and so is the angular one: the radial
+//! primitives times the angle where the clipping circle cuts the triangle, the closed-form
+//! moments of [`angular_moments`] where an edge lies inside it. Polygons are fans of
+//! triangles from their first corner. A triangle well inside the support and far from `x`
+//! against its size takes Dunavant's 7-point rule instead ([`far_triangle`]).
 
-use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::walls::geometric_shepard::{radial_moments, segment_contribution};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
-
-/// The boundary integrals of one wall element, for 2-D segments and 3-D planar polygons.
-pub trait WallIntegrals: Vector {
-    /// Contribution of the element (its corners and unit normal out of the fluid) to
-    /// `gamma(x) - 1` (paper 2, eq 8). `x` must not lie on the element.
-    fn element_gamma(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64;
-    /// `int_{S cap B(x, radius)} W(|y - x|) dS` over the part of the element within
-    /// `radius` (at most the support `2h`) of `x`.
-    fn element_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64;
-    /// Both [`WallIntegrals::element_gamma`] and the kernel integral over the support, in one
-    /// pass where that is cheaper.
-    fn element_gamma_and_integral(
-        kernel: &Wendland,
-        x: Self,
-        corners: &[Self],
-        normal: Self,
-    ) -> (f64, f64) {
-        (
-            Self::element_gamma(kernel, x, corners, normal),
-            Self::element_kernel_integral(kernel, x, corners, kernel.support),
-        )
-    }
-    /// Euclidean distance from `x` to the (closed) element.
-    fn element_distance(x: Self, corners: &[Self]) -> f64;
-    /// `true` when the straight path from `from` to `to` touches the (closed) element.
-    fn path_crosses_element(from: Self, to: Self, corners: &[Self]) -> bool;
-}
-
-/// `grad gamma_as`: the element's contribution to the gradient of the Shepard factor,
-/// `-n int_{S cap B(x, radius)} W dS` (paper 4, eq 3), pointing into the fluid.
-pub fn element_grad_gamma<V: WallIntegrals>(
-    kernel: &Wendland,
-    x: V,
-    corners: &[V],
-    normal: V,
-    radius: f64,
-) -> V {
-    -normal * V::element_kernel_integral(kernel, x, corners, radius)
-}
-
-/// `int_{u0}^{u1} w(sqrt(a^2 + u^2)) du` in units of `h`, with
-/// `w(q) = 1 - 5q^2/2 + 5q^3/2 - 15q^4/16 + q^5/8` (the Wendland kernel over `alpha`).
-fn wendland_line_integral(a: f64, u0: f64, u1: f64) -> f64 {
-    let m1 = radial_moments(a, u1);
-    let m0 = radial_moments(a, u0);
-    let d = |k: usize| m1[k] - m0[k];
-    d(0) - 2.5 * d(1) + 2.5 * d(2) - 15.0 / 16.0 * d(3) + d(4) / 8.0
-}
-
-/// `int_{p0 p1 cap B(x, radius)} W(|y - x|) dl` for a 2-D segment, in closed form.
-pub fn segment_kernel_integral(
-    kernel: &Wendland,
-    x: DVec2,
-    p0: DVec2,
-    p1: DVec2,
-    radius: f64,
-) -> f64 {
-    let h = kernel.h;
-    let d = p1 - p0;
-    let length = d.length();
-    if length == 0.0 {
-        return 0.0;
-    }
-    let t = d / length;
-    let r0 = p0 - x;
-    let a = t.perp_dot(r0).abs() / h;
-    let rq = radius.min(kernel.support) / h;
-    let half_chord2 = rq * rq - a * a;
-    if half_chord2 <= 0.0 {
-        return 0.0;
-    }
-    let half_chord = half_chord2.sqrt();
-    let s0 = r0.dot(t) / h;
-    let (u0, u1) = (s0.max(-half_chord), (s0 + length / h).min(half_chord));
-    if u0 >= u1 {
-        return 0.0;
-    }
-    // alpha_2 h = 7 / (4 pi h)
-    7.0 / (4.0 * PI * h) * wendland_line_integral(a, u0, u1)
-}
-
-/// Closest distance from `x` to the segment `p0 p1`.
-pub fn point_segment_distance(x: DVec2, p0: DVec2, p1: DVec2) -> f64 {
-    let d = p1 - p0;
-    let l2 = d.length_squared();
-    let s = if l2 > 0.0 {
-        ((x - p0).dot(d) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p0 + d * s - x).length()
-}
-
-/// `true` when the closed segments `a0 a1` and `b0 b1` share a point.
-pub fn segments_intersect(a0: DVec2, a1: DVec2, b0: DVec2, b1: DVec2) -> bool {
-    let orient = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
-    let on = |p: DVec2, q: DVec2, r: DVec2| {
-        r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
-    };
-    let (d1, d2) = (orient(b0, b1, a0), orient(b0, b1, a1));
-    let (d3, d4) = (orient(a0, a1, b0), orient(a0, a1, b1));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    (d1 == 0.0 && on(b0, b1, a0))
-        || (d2 == 0.0 && on(b0, b1, a1))
-        || (d3 == 0.0 && on(a0, a1, b0))
-        || (d4 == 0.0 && on(a0, a1, b1))
-}
-
-impl WallIntegrals for DVec2 {
-    fn element_gamma(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
-        segment_contribution(kernel, x, corners[0], corners[1], normal)
-    }
-    fn element_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
-        segment_kernel_integral(kernel, x, corners[0], corners[1], radius)
-    }
-    fn element_distance(x: Self, corners: &[Self]) -> f64 {
-        point_segment_distance(x, corners[0], corners[1])
-    }
-    fn path_crosses_element(from: Self, to: Self, corners: &[Self]) -> bool {
-        segments_intersect(from, to, corners[0], corners[1])
-    }
-}
 
 /// A radial integrand of the 3-D polar rule, `F(q) = A sum_k c_k q^k + B / q` with
 /// `q = rho / h`, whose primitive difference `F(rho / h) - F(|a| / h)` is
@@ -394,73 +255,6 @@ fn polar_triangle_rule<const N: usize>(
     total
 }
 
-/// Triangles of a planar polygon element (a fan from its first corner).
-fn fan(corners: &[DVec3]) -> impl Iterator<Item = [DVec3; 3]> + '_ {
-    (1..corners.len().saturating_sub(1)).map(move |k| [corners[0], corners[k], corners[k + 1]])
-}
-
-/// Closest point on the triangle `tri` to `x` (Ericson, Real-Time Collision Detection 5.1.5).
-pub fn closest_point_on_triangle(x: DVec3, tri: [DVec3; 3]) -> DVec3 {
-    let [a, b, c] = tri;
-    let (ab, ac, ap) = (b - a, c - a, x - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = x - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = x - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
-/// `true` when the segment `p q` touches the closed triangle `tri`.
-pub fn segment_touches_triangle(p: DVec3, q: DVec3, tri: [DVec3; 3]) -> bool {
-    let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-    let (dp, dq) = ((p - tri[0]).dot(n), (q - tri[0]).dot(n));
-    if (dp > 0.0 && dq > 0.0) || (dp < 0.0 && dq < 0.0) {
-        return false;
-    }
-    if dp == dq {
-        // Both ends in the plane: touching iff the closest distance is zero.
-        return closest_point_on_triangle(p, tri) == p || closest_point_on_triangle(q, tri) == q;
-    }
-    let s = dp / (dp - dq);
-    let y = p + (q - p) * s;
-    // Inside test by same-sign edge functions (closed).
-    let mut sign = 0.0;
-    for k in 0..3 {
-        let (u, v) = (tri[k], tri[(k + 1) % 3]);
-        let e = (v - u).cross(y - u).dot(n);
-        if e != 0.0 {
-            if sign != 0.0 && e.signum() != sign {
-                return false;
-            }
-            sign = e.signum();
-        }
-    }
-    true
-}
-
 /// Dunavant's 7-point rule (degree 5) on a triangle: barycentric points and weights.
 const DUNAVANT7: [([f64; 3], f64); 7] = [
     ([1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0], 0.225),
@@ -552,6 +346,11 @@ fn far_triangle(kernel: &Wendland, x: DVec3, tri: &[DVec3; 3]) -> Option<(f64, f
     Some((a * g * area, w * area))
 }
 
+/// Triangles of a planar polygon element (a fan from its first corner).
+pub(crate) fn fan(corners: &[DVec3]) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    (1..corners.len().saturating_sub(1)).map(move |k| [corners[0], corners[k], corners[k + 1]])
+}
+
 /// Sign of the element's normal relative to a triangle's corner-order normal.
 fn orientation(tri: &[DVec3; 3], normal: DVec3) -> f64 {
     let nn = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
@@ -562,160 +361,57 @@ fn orientation(tri: &[DVec3; 3], normal: DVec3) -> f64 {
     }
 }
 
-impl WallIntegrals for DVec3 {
-    fn element_gamma(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
-        fan(corners)
-            .map(|tri| {
-                // The polar rule measures a along the corner-order normal.
-                orientation(&tri, normal)
-                    * polar_triangle(x, tri, kernel.support, kernel.h, |a| {
-                        [Radial::shepard(kernel, a)]
-                    })[0]
-            })
-            .sum()
-    }
-    fn element_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
-        let r = radius.min(kernel.support);
-        fan(corners)
-            .map(|tri| polar_triangle(x, tri, r, kernel.h, |_| [Radial::wendland(kernel)])[0])
-            .sum()
-    }
-    fn element_gamma_and_integral(
-        kernel: &Wendland,
-        x: Self,
-        corners: &[Self],
-        normal: Self,
-    ) -> (f64, f64) {
-        let mut out = (0.0, 0.0);
-        for tri in fan(corners) {
-            if let Some((g, w)) = far_triangle(kernel, x, &tri) {
-                out.0 += orientation(&tri, normal) * g;
-                out.1 += w;
-                continue;
-            }
-            let v = polar_triangle(x, tri, kernel.support, kernel.h, |a| {
-                [Radial::shepard(kernel, a), Radial::wendland(kernel)]
-            });
-            out.0 += orientation(&tri, normal) * v[0];
-            out.1 += v[1];
+/// Shepard contribution `r_n int_S F dS` of the polygon `corners` with outward normal `normal`
+/// (paper 2, eq 8), by the polar rule on each fan triangle.
+pub fn shepard(kernel: &Wendland, x: DVec3, corners: &[DVec3], normal: DVec3) -> f64 {
+    fan(corners)
+        .map(|tri| {
+            // The polar rule measures a along the corner-order normal.
+            orientation(&tri, normal)
+                * polar_triangle(x, tri, kernel.support, kernel.h, |a| {
+                    [Radial::shepard(kernel, a)]
+                })[0]
+        })
+        .sum()
+}
+
+/// `int_{S cap B(x, radius)} W(|y - x|) dS` over the polygon `corners` (paper 4, eq 3), by the
+/// polar rule on each fan triangle; `radius` is at most the support.
+pub fn kernel_integral(kernel: &Wendland, x: DVec3, corners: &[DVec3], radius: f64) -> f64 {
+    let r = radius.min(kernel.support);
+    fan(corners)
+        .map(|tri| polar_triangle(x, tri, r, kernel.h, |_| [Radial::wendland(kernel)])[0])
+        .sum()
+}
+
+/// `(r_n int_S F dS, int_S W dS)` over the polygon `corners` (paper 2, eq 8; paper 4, eq 3):
+/// one polar rule for both on each fan triangle, or [`far_triangle`] where it applies.
+pub fn shepard_and_kernel_integral(
+    kernel: &Wendland,
+    x: DVec3,
+    corners: &[DVec3],
+    normal: DVec3,
+) -> (f64, f64) {
+    let mut out = (0.0, 0.0);
+    for tri in fan(corners) {
+        if let Some((g, w)) = far_triangle(kernel, x, &tri) {
+            out.0 += orientation(&tri, normal) * g;
+            out.1 += w;
+            continue;
         }
-        out
+        let v = polar_triangle(x, tri, kernel.support, kernel.h, |a| {
+            [Radial::shepard(kernel, a), Radial::wendland(kernel)]
+        });
+        out.0 += orientation(&tri, normal) * v[0];
+        out.1 += v[1];
     }
-    fn element_distance(x: Self, corners: &[Self]) -> f64 {
-        fan(corners)
-            .map(|tri| (closest_point_on_triangle(x, tri) - x).length())
-            .fold(f64::INFINITY, f64::min)
-    }
-    fn path_crosses_element(from: Self, to: Self, corners: &[Self]) -> bool {
-        fan(corners).any(|tri| segment_touches_triangle(from, to, tri))
-    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{box_elements_2d, box_elements_3d};
-
     use crate::quadrature::gauss_legendre as gauss_n;
-
-    #[test]
-    fn segment_integral_matches_quadrature_with_clipping() {
-        let kernel = Wendland::new(0.1, 2);
-        let x = DVec2::new(0.013, -0.021);
-        let cases = [
-            (DVec2::new(-0.5, 0.05), DVec2::new(0.5, 0.05), 0.2), // longer than the support
-            (DVec2::new(-0.03, 0.07), DVec2::new(0.11, 0.02), 0.2), // partly outside
-            (DVec2::new(0.0, 0.0), DVec2::new(0.02, 0.01), 0.2),  // inside
-            (DVec2::new(-0.5, 0.0), DVec2::new(0.5, 0.0), 0.05),  // push radius
-            (DVec2::new(0.013, -0.021), DVec2::new(0.1, -0.021), 0.2), // starts at x
-        ];
-        for (p0, p1, radius) in cases {
-            let exact = segment_kernel_integral(&kernel, x, p0, p1, radius);
-            let len = (p1 - p0).length();
-            // The part of the segment inside the circle, from |p0 + s d - x|^2 = R^2.
-            let (d, f) = (p1 - p0, p0 - x);
-            let (qa, qb, qc) = (d.dot(d), 2.0 * d.dot(f), f.dot(f) - radius * radius);
-            let root = (qb * qb - 4.0 * qa * qc).sqrt();
-            let (s0, s1) = (
-                ((-qb - root) / (2.0 * qa)).max(0.0),
-                ((-qb + root) / (2.0 * qa)).min(1.0),
-            );
-            let num = gauss_n(s0, s1, 64, |s| {
-                kernel.value((p0 + d * s - x).length()) * len
-            });
-            assert!(exact > 0.0);
-            assert!((exact - num).abs() < 1e-12 * exact, "{exact} vs {num}");
-        }
-        // A segment wholly inside the support: the quadrature has no kink, so round-off.
-        let (p0, p1) = (DVec2::new(0.0, 0.03), DVec2::new(0.05, 0.01));
-        let exact = segment_kernel_integral(&kernel, x, p0, p1, 0.2);
-        let len = (p1 - p0).length();
-        let num = gauss_n(0.0, 1.0, 64, |s| {
-            kernel.value((p0 + (p1 - p0) * s - x).length()) * len
-        });
-        assert!((exact - num).abs() < 1e-13 * exact, "{exact} vs {num}");
-    }
-
-    /// `grad gamma` from the element integrals equals the finite-difference gradient of the
-    /// exact Shepard factor (two independent closed forms), near walls and a corner.
-    fn check_gradient<V: WallIntegrals>(
-        kernel: &Wendland,
-        shapes: &[crate::geometry::ElementShape<V>],
-        points: &[V],
-        tol: f64,
-    ) {
-        let gamma = |x: V| -> f64 {
-            1.0 + shapes
-                .iter()
-                .map(|s| V::element_gamma(kernel, x, &s.corners, s.normal))
-                .sum::<f64>()
-        };
-        for &x in points {
-            let grad: V = shapes
-                .iter()
-                .map(|s| element_grad_gamma(kernel, x, &s.corners, s.normal, kernel.support))
-                .fold(V::ZERO, |a, b| a + b);
-            let eps = 1e-5 * kernel.h;
-            let mut fd = V::ZERO;
-            for k in 0..V::DIM {
-                let mut e = V::ZERO;
-                e.set(k, eps);
-                fd.set(k, (gamma(x + e) - gamma(x - e)) / (2.0 * eps));
-            }
-            assert!(grad.length() > 0.0, "test point must see a wall");
-            assert!(
-                (grad - fd).length() < tol / kernel.h,
-                "{x:?}: {grad:?} vs {fd:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn grad_gamma_is_the_gradient_of_gamma_2d() {
-        let kernel = Wendland::new(0.02, 2);
-        let shapes = box_elements_2d(DVec2::ZERO, DVec2::ONE, &[], 0.013);
-        let points = [
-            DVec2::new(0.5, 0.013),
-            DVec2::new(0.007, 0.021),
-            DVec2::new(0.011, 0.013),
-            DVec2::new(0.5, 0.0399),
-            DVec2::new(0.981, 0.992),
-        ];
-        check_gradient(&kernel, &shapes, &points, 1e-7);
-    }
-
-    #[test]
-    fn grad_gamma_is_the_gradient_of_gamma_3d() {
-        let kernel = Wendland::new(0.1, 3);
-        let shapes = box_elements_3d(DVec3::ZERO, DVec3::ONE, &[], 0.17);
-        let points = [
-            DVec3::new(0.5, 0.5, 0.07),
-            DVec3::new(0.05, 0.13, 0.11),
-            DVec3::new(0.03, 0.04, 0.06),
-            DVec3::new(0.52, 0.48, 0.19),
-        ];
-        check_gradient(&kernel, &shapes, &points, 1e-7);
-    }
 
     /// Half-space values: `int_plane W dA = 2 pi alpha h^2 (P(2) - P(a/h))` and
     /// `gamma(a) = 1 - int_a^{2h} 2 pi alpha h^2 (P(2) - P(z/h)) dz`.
@@ -739,20 +435,20 @@ mod tests {
         let n = DVec3::new(0.0, 0.0, -1.0);
         for a in [1e-3, 0.03, 0.1, 0.17, 0.199] {
             let x = DVec3::new(0.013, -0.02, a);
-            let w = DVec3::element_kernel_integral(&kernel, x, &c, 2.0 * h);
+            let w = kernel_integral(&kernel, x, &c, 2.0 * h);
             let exact = plane_integral(a);
             assert!(
                 (w - exact).abs() < 1e-13 * plane_integral(0.0),
                 "a={a}: {w} vs {exact}"
             );
-            let g = 1.0 + DVec3::element_gamma(&kernel, x, &c, n);
+            let g = 1.0 + shepard(&kernel, x, &c, n);
             let g_exact = 1.0 - gauss_n(a, 2.0 * h, 16, plane_integral);
             assert!((g - g_exact).abs() < 1e-12, "a={a}: {g} vs {g_exact}");
         }
         // Clipped to a push radius: the disc of radius sqrt(R^2 - a^2).
         let (a, radius) = (0.02, 0.05);
         let x = DVec3::new(0.0, 0.0, a);
-        let w = DVec3::element_kernel_integral(&kernel, x, &c, radius);
+        let w = kernel_integral(&kernel, x, &c, radius);
         let exact = 2.0 * PI * alpha * h * h * (p(radius / h) - p(a / h));
         assert!((w - exact).abs() < 1e-12 * exact);
     }
@@ -805,7 +501,7 @@ mod tests {
         let x = DVec3::new(0.02, 0.01, 0.07);
         let area2 = (tri[1] - tri[0]).cross(tri[2] - tri[0]).length();
         for radius in [0.2, 0.09] {
-            let exact = DVec3::element_kernel_integral(&kernel, x, &tri, radius);
+            let exact = kernel_integral(&kernel, x, &tri, radius);
             // Collapsed square map (u, v) -> a + u (b - a) + u v (c - b), Jacobian u.
             let num = gauss_n(0.0, 1.0, 400, |u| {
                 gauss_n(0.0, 1.0, 400, |v| {
@@ -878,45 +574,5 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn crossing_and_distance_helpers() {
-        assert!(segments_intersect(
-            DVec2::ZERO,
-            DVec2::ONE,
-            DVec2::new(0.0, 1.0),
-            DVec2::new(1.0, 0.0)
-        ));
-        assert!(segments_intersect(
-            DVec2::ZERO,
-            DVec2::new(0.5, 0.0),
-            DVec2::new(0.5, -1.0),
-            DVec2::new(0.5, 1.0)
-        ));
-        assert!(!segments_intersect(
-            DVec2::ZERO,
-            DVec2::new(0.4, 0.0),
-            DVec2::new(0.5, -1.0),
-            DVec2::new(0.5, 1.0)
-        ));
-        let tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
-        assert!(segment_touches_triangle(
-            DVec3::new(0.2, 0.2, -1.0),
-            DVec3::new(0.2, 0.2, 1.0),
-            tri
-        ));
-        assert!(!segment_touches_triangle(
-            DVec3::new(0.8, 0.8, -1.0),
-            DVec3::new(0.8, 0.8, 1.0),
-            tri
-        ));
-        assert!(segment_touches_triangle(
-            DVec3::new(0.2, 0.2, 1.0),
-            DVec3::new(0.2, 0.2, 0.0),
-            tri
-        ));
-        assert!((DVec3::element_distance(DVec3::new(0.2, 0.2, 0.3), &tri) - 0.3).abs() < 1e-15);
-        assert!((DVec3::element_distance(DVec3::new(2.0, 0.0, 0.0), &tri) - 1.0).abs() < 1e-15);
     }
 }
