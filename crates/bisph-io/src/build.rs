@@ -525,7 +525,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         kernel,
         eos,
         gravity,
-        delta: case.fluid.delta,
+        delta: case.delta(),
         delta_hydrostatic: case.fluid.delta_hydrostatic,
         courant: case.time.courant,
         fixed_dt: case.time.dt,

@@ -169,9 +169,9 @@ pub struct FluidSection {
     /// Gravity vector [m/s^2] (`dim` components).
     #[serde(default)]
     pub gravity: Vec<f64>,
-    /// delta-SPH coefficient (0 = off).
-    #[serde(default)]
-    pub delta: f64,
+    /// delta-SPH coefficient (0 = off; default [`DEFAULT_BI_DELTA`] with `boundary = "bi"`,
+    /// whose operators are not skew-adjoint and gain energy without diffusion, else 0).
+    pub delta: Option<f64>,
     /// Hydrostatic correction of the density diffusion (delta-SPH, or paper 3 eq 81).
     #[serde(default = "yes")]
     pub delta_hydrostatic: bool,
@@ -188,6 +188,19 @@ pub struct FluidSection {
     /// Multiplier of Ferrari's diffusion term.
     #[serde(default = "one")]
     pub ferrari_coefficient: f64,
+}
+
+/// The delta-SPH coefficient `boundary = "bi"` gets when `fluid.delta` is left out.
+pub const DEFAULT_BI_DELTA: f64 = 0.1;
+
+impl Case {
+    /// The delta-SPH coefficient in force: `fluid.delta`, or the wall model's default.
+    pub fn delta(&self) -> f64 {
+        self.fluid.delta.unwrap_or(match self.boundary {
+            BoundaryName::Bi => DEFAULT_BI_DELTA,
+            BoundaryName::Energy | BoundaryName::Usaw => 0.0,
+        })
+    }
 }
 
 /// `[flux]`: a driving body force imposing a volume flux (paper 3, section 5).
@@ -1232,10 +1245,10 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             "missing: needed by tolerance_reference = \"given\"".into(),
         );
     }
-    if !(c.fluid.delta >= 0.0 && c.fluid.delta <= 1.0) {
+    if !(c.delta() >= 0.0 && c.delta() <= 1.0) {
         return e(
             "fluid.delta",
-            format!("expected a value in [0, 1], found {}", c.fluid.delta),
+            format!("expected a value in [0, 1], found {}", c.delta()),
         );
     }
     if !(c.fluid.viscosity >= 0.0 && c.fluid.viscosity.is_finite()) {

@@ -85,7 +85,10 @@ fn settling_is_off_unless_asked_for() {
 #[test]
 fn settling_a_case_that_is_not_at_rest_is_a_named_error() {
     for (set, names) in [
-        ("fluid_block.0.velocity=[1.0, 0.0]", "fluid_block[0].velocity"),
+        (
+            "fluid_block.0.velocity=[1.0, 0.0]",
+            "fluid_block[0].velocity",
+        ),
         ("fluid.gravity=[0.0, 0.0]", "no gravity"),
         ("settle.tolerance=-1.0", "positive"),
     ] {
