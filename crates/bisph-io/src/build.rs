@@ -572,7 +572,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         elastic_bounce: case.elastic_bounce,
         periodicity,
         viscosity: bisph_core::terms::Viscosity {
-            nu: case.fluid.viscosity,
+            nu: case.kinematic_viscosity(),
             min_wall_distance: 0.5 * dx,
         },
         flux: case.flux.as_ref().map(|f| {

@@ -58,10 +58,10 @@ pub enum BoundaryName {
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum ShepardName {
-    /// `sum_j W_ij V_j` over the fluid.
-    #[default]
+    /// `sum_j W_ij V_j` over the fluid (lowered by free surfaces too).
     Discrete,
-    /// From the wall elements alone (paper 2).
+    /// From the wall elements alone (paper 2). The default.
+    #[default]
     Geometric,
     /// Integrated in time, `dgamma/dt = v_rel . grad gamma` (paper 3, eq 4).
     Integrated,
@@ -179,6 +179,10 @@ pub struct FluidSection {
     /// wall shear (paper 3, eqs 18-20).
     #[serde(default)]
     pub viscosity: f64,
+    /// Artificial viscosity `alpha` (Monaghan), applied through the same Laplacian as the
+    /// laminar viscosity with the equivalent `nu = alpha h c0 / (2 (d + 2))`, its dissipation
+    /// booked in `energy.csv` (default [`DEFAULT_BI_ALPHA`] with `boundary = "bi"`, else 0).
+    pub artificial_viscosity: Option<f64>,
     /// Density diffusion form.
     #[serde(default)]
     pub diffusion: DiffusionName,
@@ -193,6 +197,10 @@ pub struct FluidSection {
 /// The delta-SPH coefficient `boundary = "bi"` gets when `fluid.delta` is left out.
 pub const DEFAULT_BI_DELTA: f64 = 0.1;
 
+/// The artificial viscosity `boundary = "bi"` gets when `fluid.artificial_viscosity` is left
+/// out: with it a tank at rest stays within 1% of `sqrt(g H)` (`bisph validate still-water`).
+pub const DEFAULT_BI_ALPHA: f64 = 0.05;
+
 impl Case {
     /// The delta-SPH coefficient in force: `fluid.delta`, or the wall model's default.
     pub fn delta(&self) -> f64 {
@@ -200,6 +208,26 @@ impl Case {
             BoundaryName::Bi => DEFAULT_BI_DELTA,
             BoundaryName::Energy | BoundaryName::Usaw => 0.0,
         })
+    }
+
+    /// The artificial viscosity `alpha` in force: `fluid.artificial_viscosity`, or the wall
+    /// model's default.
+    pub fn artificial_viscosity(&self) -> f64 {
+        self.fluid
+            .artificial_viscosity
+            .unwrap_or(match self.boundary {
+                BoundaryName::Bi => DEFAULT_BI_ALPHA,
+                BoundaryName::Energy | BoundaryName::Usaw => 0.0,
+            })
+    }
+
+    /// The kinematic viscosity of the Laplacian [m^2/s]: `fluid.viscosity` plus the
+    /// artificial viscosity's equivalent `alpha h c0 / (2 (d + 2))` (Monaghan 2005).
+    pub fn kinematic_viscosity(&self) -> f64 {
+        let h = self.resolution.h_over_dx * self.resolution.dx;
+        let d = self.dim as f64;
+        self.fluid.viscosity
+            + self.artificial_viscosity() * h * self.fluid.sound_speed / (2.0 * (d + 2.0))
     }
 }
 
@@ -891,7 +919,8 @@ pub struct Case {
     /// Wall model.
     #[serde(default)]
     pub boundary: BoundaryName,
-    /// Shepard factor of the `bi` walls: `"discrete"` or `"geometric"`.
+    /// Shepard factor of the `bi` walls: `"geometric"` (default), `"discrete"` or
+    /// `"integrated"`.
     #[serde(default)]
     pub shepard: ShepardName,
     /// Options of the semi-analytical walls (`boundary = "usaw"`).
@@ -1249,6 +1278,15 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         return e(
             "fluid.delta",
             format!("expected a value in [0, 1], found {}", c.delta()),
+        );
+    }
+    if !(c.artificial_viscosity() >= 0.0 && c.artificial_viscosity() <= 1.0) {
+        return e(
+            "fluid.artificial_viscosity",
+            format!(
+                "expected a value in [0, 1], found {}",
+                c.artificial_viscosity()
+            ),
         );
     }
     if !(c.fluid.viscosity >= 0.0 && c.fluid.viscosity.is_finite()) {

@@ -646,10 +646,25 @@ impl ValidationCase for LobovskyDamBreak {
             // Wall models and diffusion at H/50 (paper 1: plain BI pumps energy; with delta-SPH
             // the final losses are 8.39% (BI) and 6.72% (energy-conserving walls)).
             let variants: [(&str, &[&str]); 3] = [
-                ("bi-no-diffusion", &["boundary=bi", "output.vtk_interval=0"]),
+                (
+                    "bi-no-diffusion",
+                    &[
+                        "boundary=bi",
+                        "shepard=discrete",
+                        "fluid.delta=0",
+                        "fluid.artificial_viscosity=0",
+                        "output.vtk_interval=0",
+                    ],
+                ),
                 (
                     "bi-delta",
-                    &["boundary=bi", "fluid.delta=0.1", "output.vtk_interval=0"],
+                    &[
+                        "boundary=bi",
+                        "shepard=discrete",
+                        "fluid.delta=0.1",
+                        "fluid.artificial_viscosity=0",
+                        "output.vtk_interval=0",
+                    ],
                 ),
                 (
                     "energy-delta",

@@ -414,6 +414,7 @@ density = 998.0
 sound_speed = 9.5
 gravity = [0.0, -9.81]
 delta = 0.1
+artificial_viscosity = 0.0
 [resolution]
 dx = 0.0046
 h_over_dx = 2.0
