@@ -36,9 +36,9 @@ struct Model {
 const MODELS: [Model; 3] = [
     Model {
         name: "energy",
-        known_failures: &["speed", "growth", "bottom"],
+        known_failures: &["end", "speed", "growth", "bottom"],
         overrides: &["boundary=\"energy\""],
-        limitation: "the energy-conserving walls are zeroth-order consistent (paper 1): next to a vertical wall the fluid sum gives the particles only part of their vertical pressure support, the wall column sinks and the rest state found by settling is far from the lattice and drifts",
+        limitation: "the energy-conserving walls are zeroth-order consistent (paper 1): next to a vertical wall the fluid sum gives the particles only part of their vertical pressure support, the wall column sinks and the rest state found by settling is far from the lattice and drifts; at H/40 the explicit scheme blows up from it after 4.5 s",
     },
     Model {
         name: "bi + geometric",
@@ -103,7 +103,8 @@ fn run_model(model: &Model, quick: bool) -> Result<StillWaterRun, String> {
     'outer: for k in 0..=samples {
         let target = end * k as f64 / samples as f64;
         while sim.time < target - 1e-12 {
-            if let Err(e) = sim.advance(Some(target)) {
+            // Steps are clamped at the end of the run only: the samples need no tiny steps.
+            if let Err(e) = sim.advance(Some(end)) {
                 run.stopped = Some(e.to_string());
                 break 'outer;
             }
