@@ -1,10 +1,12 @@
 //! `bisph`: the command line of the boundary-integral SPH solver.
 
 mod bench;
+mod estimates;
+mod progress;
 
-use bisph_io::{load_case, resume_case, run_case_with, Progress, RunError, RunOptions};
+use bisph_io::{load_case, resume_case, run_case_with, RunError, RunOptions};
 use clap::{Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use signal_hook::consts::{SIGINT, SIGTERM};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -76,7 +78,7 @@ struct ValidateArgs {
     /// Output directory (default: out/validate).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// List the cases and exit.
+    /// List the cases with their quick and full run times, and exit.
     #[arg(long)]
     list: bool,
 }
@@ -94,9 +96,13 @@ struct RunArgs {
     /// Number of threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// No progress bar.
+    /// No progress output.
     #[arg(long)]
     quiet: bool,
+    /// Seconds of wall time between two plain progress lines when stderr is not a terminal
+    /// (a log file, a batch job); on a terminal a bar is drawn instead.
+    #[arg(long, value_name = "SECONDS", default_value_t = progress::DEFAULT_INTERVAL)]
+    progress_interval: f64,
     /// Continue the run whose output directory is DIR from its checkpoint (no case argument).
     #[arg(long, value_name = "DIR", conflicts_with_all = ["case", "out", "overrides"])]
     resume: Option<PathBuf>,
@@ -108,13 +114,24 @@ struct RunArgs {
     checkpoint_minutes: Option<f64>,
 }
 
-/// Exit codes: 0 success, 1 bad input, 2 validation out of tolerance, 4 I/O error,
-/// 5 checkpoint refused, 6 not enough memory, 10 interrupted (checkpoint written),
-/// 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
+/// Exit code of `bisph validate` when a check is out of tolerance or a case fails to run
+/// (2 is a command-line usage error, as clap reports it).
+const EXIT_VALIDATION_FAILED: u8 = 3;
+/// Exit code of `bisph run --resume` when there is no checkpoint to continue from.
+const EXIT_CHECKPOINT_REFUSED: u8 = 5;
+/// Exit code of a run interrupted by SIGINT or SIGTERM (a checkpoint was written).
+const EXIT_INTERRUPTED: u8 = 10;
+
+/// Exit codes: 0 success, 1 bad input, 2 command-line usage error, 3 validation out of
+/// tolerance, 4 I/O error, 5 checkpoint refused, 6 not enough memory, 10 interrupted
+/// (checkpoint written), 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        None => run(RunArgs::default()),
+        None => run(RunArgs {
+            progress_interval: progress::DEFAULT_INTERVAL,
+            ..RunArgs::default()
+        }),
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(args)) => bench::bench(args),
         Some(Command::Validate(args)) => validate(args),
@@ -123,6 +140,12 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // An interrupt is what the user asked for, not an error: its line says where the
+        // checkpoint is and how to continue.
+        Err((EXIT_INTERRUPTED, message)) => {
+            eprintln!("{message}");
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
         Err((code, message)) => {
             eprintln!("error: {message}");
             ExitCode::from(code)
@@ -147,10 +170,13 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
     set_threads(args.threads)?;
     let (loaded, out) = match &args.resume {
-        Some(dir) => (
-            resume_case(dir).map_err(|e| (e.exit_code(), e.to_string()))?,
-            dir.clone(),
-        ),
+        Some(dir) => {
+            nothing_to_resume(dir)?;
+            (
+                resume_case(dir).map_err(|e| (e.exit_code(), e.to_string()))?,
+                dir.clone(),
+            )
+        }
         None => {
             let loaded =
                 load_case(args.case.as_deref(), &args.overrides).map_err(|e| (1, e.to_string()))?;
@@ -161,6 +187,15 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             (loaded, out)
         }
     };
+    if !(args.progress_interval >= 0.0 && args.progress_interval.is_finite()) {
+        return Err((
+            1,
+            format!(
+                "--progress-interval: expected zero or a positive number of seconds, found {}",
+                args.progress_interval
+            ),
+        ));
+    }
     if let Some(m) = args.checkpoint_minutes {
         if !(m >= 0.0 && m.is_finite()) {
             return Err((
@@ -182,28 +217,9 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
         stop: Some(&stop),
         resume: args.resume.is_some(),
     };
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1000)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} t = {msg} [{elapsed_precise} < {eta_precise}]")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let started = std::time::Instant::now();
-    let mut report = |p: Progress| {
-        if p.step.is_multiple_of(20) || p.time >= p.end {
-            bar.set_position((1000.0 * p.time / p.end) as u64);
-            let rate = p.step as f64 / started.elapsed().as_secs_f64().max(1e-9);
-            bar.set_message(format!(
-                "{:.4} s, step {}, {:.0} steps/s",
-                p.time, p.step, rate
-            ));
-        }
-    };
-    let result = run_case_with(&loaded, &out, &options, &mut report);
-    bar.finish_and_clear();
+    let mut shown = progress::RunProgress::new(args.quiet, args.progress_interval);
+    let result = run_case_with(&loaded, &out, &options, &mut |p| shown.report(p));
+    shown.finish();
     match result {
         Ok(s) => {
             println!(
@@ -242,6 +258,41 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
         )),
         Err(e) => Err((e.exit_code(), e.to_string())),
     }
+}
+
+/// Refuses `--resume DIR` with a message naming the folder when there is nothing to continue:
+/// no such folder, or a run that finished (it removes its checkpoint at the end). A folder
+/// with neither a checkpoint nor a finished run is left to the checkpoint reader's message.
+fn nothing_to_resume(dir: &std::path::Path) -> Result<(), (u8, String)> {
+    let refused = EXIT_CHECKPOINT_REFUSED;
+    if !dir.is_dir() {
+        return Err((
+            refused,
+            format!(
+                "cannot resume {}: no such folder (give the output folder of an interrupted or stopped run)",
+                dir.display()
+            ),
+        ));
+    }
+    let checkpoint = dir.join(bisph_io::checkpoint::FILE_NAME);
+    if checkpoint.exists() {
+        return Ok(());
+    }
+    let finished = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
+        .is_some_and(|summary| summary.get("stopped").is_none());
+    if finished {
+        return Err((
+            refused,
+            format!(
+                "nothing to resume in {}: the run there reached its end (see its summary.json) and removed its checkpoint; to run it again: bisph run {} --out NEW_FOLDER",
+                dir.display(),
+                dir.join("case.toml").display()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn shepard(args: ShepardArgs) -> Result<(), (u8, String)> {
@@ -303,9 +354,20 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     use bisph_io::validate::{markdown, registry, table};
     let cases = registry();
     if args.list {
+        println!(
+            "{:<24} {:>7} {:>7}  what it checks",
+            "case", "quick", "full"
+        );
         for c in &cases {
-            println!("{:<24} {}", c.name(), c.description());
+            let (quick, full) = match estimates::estimate(c.name()) {
+                Some(e) => (e.quick.to_string(), e.full.to_string()),
+                None => ("?".into(), "?".into()),
+            };
+            println!("{:<24} {quick:>7} {full:>7}  {}", c.name(), c.description());
         }
+        println!(
+            "\nrun times on 2 threads of a 2-vCPU machine; ~: scaled from the quick run by the cost of the full resolution, not measured"
+        );
         return Ok(());
     }
     for name in &args.names {
@@ -373,7 +435,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
         Ok(())
     } else {
         Err((
-            2,
+            EXIT_VALIDATION_FAILED,
             format!("out of tolerance or failed: {}", failed.join(", ")),
         ))
     }

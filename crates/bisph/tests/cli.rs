@@ -755,3 +755,187 @@ fn bench_repeat_summarises_the_runs() {
     let speed_up = summary[1]["speed_up_median"].as_f64().unwrap();
     assert!(speed_up > 0.0 && speed_up.is_finite(), "{speed_up}");
 }
+
+/// With stderr not a terminal (a log file, a batch job) `bisph run` writes plain progress
+/// lines (simulated time, step, steps/s, ETA) at the asked interval; `--quiet` writes none.
+#[test]
+fn progress_is_printed_as_plain_lines_when_stderr_is_not_a_terminal() {
+    let dir = temp_dir("progress-lines");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, VALID).unwrap();
+    let run = |extra: &[&str]| {
+        let out_dir = dir.join("out");
+        let mut args = vec![
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = bisph(&args);
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let stderr = run(&["--progress-interval", "0"]);
+    let lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("progress: "))
+        .collect();
+    assert!(lines.len() > 2, "{stderr}");
+    for l in &lines {
+        assert!(
+            l.contains("t = ")
+                && l.contains(" s of 0.0100 s (")
+                && l.contains(", step ")
+                && l.contains(" steps/s, ETA "),
+            "{l}"
+        );
+    }
+    // No bar or escape sequences in a log.
+    assert!(!stderr.contains('\u{1b}'), "{stderr}");
+    // The default interval (10 s) is longer than this run.
+    assert!(!run(&[]).contains("progress: "));
+    assert!(!run(&["--quiet", "--progress-interval", "0"]).contains("progress: "));
+    let out = bisph(&["run", case.to_str().unwrap(), "--progress-interval=-1"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--progress-interval"));
+}
+
+/// A command-line usage error (exit 2) and a failed validation (exit 3) have distinct codes.
+#[test]
+fn usage_errors_and_failed_validations_have_distinct_exit_codes() {
+    let out = bisph(&["run", "--no-such-option"]);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let out = bisph(&["validate", "--quick", "--no-such-option"]);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    // A file where the case's folder should be: the case fails to run.
+    let dir = temp_dir("validate-fails");
+    std::fs::write(dir.join("shepard-gamma-2d"), "in the way").unwrap();
+    let out = bisph(&[
+        "validate",
+        "--quick",
+        "shepard-gamma-2d",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("error: out of tolerance or failed: shepard-gamma-2d"),
+        "{stderr}"
+    );
+}
+
+/// `--resume` on a run that reached its end (no checkpoint left) or on a folder that does not
+/// exist says so and names the folder (exit 5), instead of a bare "No such file".
+#[test]
+fn resuming_a_finished_run_names_the_folder() {
+    let dir = temp_dir("resume-finished");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, VALID).unwrap();
+    let run_dir = dir.join("done");
+    let out = bisph(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        run_dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let out = bisph(&["run", "--resume", run_dir.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{stderr}");
+    assert!(
+        stderr.starts_with(&format!(
+            "error: nothing to resume in {}",
+            run_dir.display()
+        )),
+        "{stderr}"
+    );
+    assert!(stderr.contains("reached its end"), "{stderr}");
+    assert!(!stderr.contains("No such file"), "{stderr}");
+    let missing = dir.join("never-run");
+    let out = bisph(&["run", "--resume", missing.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "cannot resume {}: no such folder",
+            missing.display()
+        )),
+        "{stderr}"
+    );
+}
+
+/// Every link in a generated `report.md` (plots in the case folders, nested run folders)
+/// resolves relative to the report.
+#[test]
+fn every_link_in_a_generated_report_resolves() {
+    let dir = temp_dir("report-links");
+    // Cheap cases whose plots lie directly in the case folder and in a run folder below it.
+    let out = bisph(&[
+        "validate",
+        "--quick",
+        "shepard-gamma-2d",
+        "jet-impact",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let mut links = Vec::new();
+    let mut rest = report.as_str();
+    while let Some(k) = rest.find("](") {
+        rest = &rest[k + 2..];
+        let end = rest.find(')').expect("a closed link");
+        links.push(&rest[..end]);
+        rest = &rest[end..];
+    }
+    let plots = links.iter().filter(|l| l.ends_with(".png")).count();
+    assert!(plots >= 4, "{links:?}");
+    for link in links {
+        if link.starts_with("http://") || link.starts_with("https://") || link.starts_with('#') {
+            continue;
+        }
+        let target = link.split('#').next().unwrap();
+        assert!(
+            !Path::new(target).is_absolute(),
+            "{link}: absolute, breaks when the report moves"
+        );
+        assert!(dir.join(target).is_file(), "{link} does not resolve");
+    }
+}
+
+/// `validate --list` gives every case a quick and a full run time.
+#[test]
+fn validate_list_gives_a_run_time_per_case() {
+    let out = bisph(&["validate", "--list"]);
+    assert!(out.status.success(), "{out:?}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let mut lines = stdout.lines();
+    let header = lines.next().unwrap();
+    assert!(
+        header.contains("quick") && header.contains("full"),
+        "{header}"
+    );
+    let rows: Vec<&str> = lines.take_while(|l| !l.is_empty()).collect();
+    assert!(rows.len() > 20, "{stdout}");
+    let is_time = |w: &str| {
+        let w = w.trim_start_matches('~');
+        w == "<1" || w.parse::<f64>().is_ok()
+    };
+    for row in &rows {
+        let words: Vec<&str> = row.split_whitespace().collect();
+        // name, quick figure and unit, full figure and unit, description.
+        assert!(
+            is_time(words[1]) && ["s", "min", "h"].contains(&words[2]),
+            "{row}"
+        );
+        assert!(
+            is_time(words[3]) && ["s", "min", "h"].contains(&words[4]),
+            "{row}"
+        );
+    }
+    assert!(rows.iter().any(|r| r.starts_with("spheric-test2 ")));
+    assert!(stdout.contains("scaled from the quick run"), "{stdout}");
+}

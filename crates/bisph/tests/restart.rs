@@ -425,6 +425,9 @@ fn sigterm_checkpoints_and_resumes() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(10), "{stderr}");
     assert!(stderr.contains("--resume"), "{stderr}");
+    // An interrupt is asked for, not an error.
+    assert!(stderr.starts_with("interrupted at step"), "{stderr}");
+    assert!(!stderr.contains("error"), "{stderr}");
     let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
     assert!(summary.contains("interrupted"), "{summary}");
     run_to_end(&resume_args(case, &dir, "1"));
