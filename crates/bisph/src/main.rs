@@ -350,12 +350,24 @@ fn pack(args: PackArgs) -> Result<(), (u8, String)> {
     Ok(())
 }
 
+/// Writes `text` to stdout; a reader that closed the pipe early (`| head`) is not an error.
+fn print_all(text: &str) -> Result<(), (u8, String)> {
+    use std::io::Write as _;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err((4, format!("cannot write to stdout: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
 fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     use bisph_io::validate::{markdown, registry, table};
     let cases = registry();
     if args.list {
-        println!(
-            "{:<24} {:>7} {:>7}  what it checks",
+        use std::fmt::Write as _;
+        let mut text = format!(
+            "{:<24} {:>7} {:>7}  what it checks\n",
             "case", "quick", "full"
         );
         for c in &cases {
@@ -363,12 +375,17 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
                 Some(e) => (e.quick.to_string(), e.full.to_string()),
                 None => ("?".into(), "?".into()),
             };
-            println!("{:<24} {quick:>7} {full:>7}  {}", c.name(), c.description());
+            let _ = writeln!(
+                text,
+                "{:<24} {quick:>7} {full:>7}  {}",
+                c.name(),
+                c.description()
+            );
         }
-        println!(
-            "\nrun times on 2 threads of a 2-vCPU machine; ~: scaled from the quick run by the cost of the full resolution, not measured"
+        text.push_str(
+            "\nrun times on 2 threads of a 2-vCPU machine; ~: scaled from the quick run by the cost of the full resolution, not measured\n",
         );
-        return Ok(());
+        return print_all(&text);
     }
     for name in &args.names {
         if !cases.iter().any(|c| c.name() == name) {
