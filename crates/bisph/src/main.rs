@@ -42,7 +42,7 @@ struct ShepardArgs {
     /// `discrete` (sum over the case's fluid particles), `geometric` (walls only, paper 2)
     /// or `integrated` (2-D: grad gamma of the walls integrated along a path from gamma = 1).
     #[arg(long, default_value = "geometric")]
-    method: bisph_io::shepard::ShepardMethod,
+    method: bisph_io::run::shepard::ShepardMethod,
     /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
@@ -246,8 +246,8 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
 
 fn shepard(args: ShepardArgs) -> Result<(), (u8, String)> {
     let loaded = load_case(Some(&args.case), &args.overrides).map_err(|e| (1, e.to_string()))?;
-    let table =
-        bisph_io::shepard::shepard_table(&loaded, &args.points, args.method).map_err(|e| (1, e))?;
+    let table = bisph_io::run::shepard::shepard_table(&loaded, &args.points, args.method)
+        .map_err(|e| (1, e))?;
     print!("{table}");
     Ok(())
 }
@@ -272,7 +272,7 @@ fn pack(args: PackArgs) -> Result<(), (u8, String)> {
             bar.tick();
         }
     };
-    let result = bisph_io::pack::pack_case(&loaded, &out, &mut report);
+    let result = bisph_io::run::pack::pack_case(&loaded, &out, &mut report);
     bar.finish_and_clear();
     let summary = result.map_err(|e| (1, e.to_string()))?;
     for b in &summary.blocks {
@@ -300,7 +300,7 @@ fn pack(args: PackArgs) -> Result<(), (u8, String)> {
 }
 
 fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
-    use bisph_io::validate::{markdown, registry, table};
+    use bisph_validate::{markdown, registry, table};
     let cases = registry();
     if args.list {
         for c in &cases {

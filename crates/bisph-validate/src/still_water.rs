@@ -7,11 +7,11 @@
 //! above its mean over the second quarter); the bottom wall pressure at mid-width within 1% of
 //! `rho g H` (time mean over the second half); no particle behind a wall.
 
-use crate::build::build_simulation;
-use crate::case::parse_case;
-use crate::plot::line_plot_png as plot;
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::Simulation;
+use bisph_io::case::build_simulation;
+use bisph_io::case::parse_case;
+use bisph_io::formats::plot::line_plot_png as plot;
 use glam::DVec2;
 use std::path::Path;
 
@@ -78,7 +78,7 @@ fn run_model(model: &Model, quick: bool) -> Result<StillWaterRun, String> {
     overrides.push(format!("time.end={end}"));
     let loaded = parse_case("<still-water>", TANK, &overrides).map_err(|e| e.to_string())?;
     let mut sim: Simulation<DVec2> = build_simulation(&loaded).map_err(|e| e.to_string())?;
-    let settling = match crate::settle::settle(&loaded, &mut sim) {
+    let settling = match bisph_io::run::settle::settle(&loaded, &mut sim) {
         Ok(Some(s)) => format!(
             "settling {} after {:.2} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(gH)",
             s.outcome, s.time, s.steps, s.wall_seconds, s.max_speed_relative
