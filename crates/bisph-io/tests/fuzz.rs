@@ -11,12 +11,13 @@
 //! Inputs that once failed are kept under `tests/fuzz-corpus/<kind>/` and replayed every run.
 
 use bisph_core::surface::Surface;
-use bisph_io::build::build_simulation;
-use bisph_io::checkpoint::{self, Checkpoint, SimState};
-use bisph_io::mesh_walls::{checked_elements, MAX_MESH_ELEMENTS};
-use bisph_io::shapes::{parse_obj, parse_rows, parse_stl};
-use bisph_io::shepard::parse_points;
-use bisph_io::{parse_case, resources};
+use bisph_io::case::build_simulation;
+use bisph_io::case::mesh_walls::{checked_elements, MAX_MESH_ELEMENTS};
+use bisph_io::case::resources;
+use bisph_io::formats::mesh_files::{parse_obj, parse_rows, parse_stl};
+use bisph_io::parse_case;
+use bisph_io::run::checkpoint::{self, Checkpoint, SimState};
+use bisph_io::run::shepard::parse_points;
 use glam::DVec2;
 use glam::DVec3;
 use proptest::prelude::*;
@@ -545,7 +546,7 @@ fn hostile_inputs_are_refused() {
         b"solid t\nouter loop\nvertex nan 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendsolid\n";
     let file = std::env::temp_dir().join(format!("bisph-hostile-{}.stl", std::process::id()));
     std::fs::write(&file, stl).unwrap();
-    let e = bisph_io::shapes::read_stl(&file).unwrap_err();
+    let e = bisph_io::formats::mesh_files::read_stl(&file).unwrap_err();
     assert!(e.contains("non-finite"), "{e}");
     let _ = std::fs::remove_file(&file);
     // OBJ: a non-finite vertex is refused by name; a vertex far off (or a mesh in the wrong

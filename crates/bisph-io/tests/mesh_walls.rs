@@ -4,9 +4,9 @@
 use bisph_core::geometry::{box_elements_3d, triangulate, ElementShape};
 use bisph_core::walls::geometric_shepard::gamma;
 use bisph_core::Simulation;
-use bisph_io::build::build_simulation;
+use bisph_io::case::build_simulation;
+use bisph_io::formats::mesh_files::{write_stl_ascii, write_stl_binary};
 use bisph_io::parse_case;
-use bisph_io::shapes::{write_stl_ascii, write_stl_binary};
 use glam::DVec3;
 use std::fmt::Write as _;
 use std::path::PathBuf;

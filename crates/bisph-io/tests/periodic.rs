@@ -2,8 +2,8 @@
 //! axis are conserved to round-off, in 2-D and 3-D, alone and beside walls.
 
 use bisph_core::Simulation;
-use bisph_io::build::{build_simulation, CaseDim};
 use bisph_io::case::parse_case;
+use bisph_io::case::{build_simulation, CaseDim};
 use glam::{DVec2, DVec3};
 
 fn pseudo_random(seed: &mut u64) -> f64 {

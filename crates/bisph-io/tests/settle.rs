@@ -3,9 +3,9 @@
 //! cannot apply to are refused with a named error.
 
 use bisph_core::Simulation;
-use bisph_io::build::build_simulation;
+use bisph_io::case::build_simulation;
 use bisph_io::parse_case;
-use bisph_io::settle::settle;
+use bisph_io::run::settle::settle;
 use glam::DVec2;
 
 const TANK: &str = r#"

@@ -4,8 +4,8 @@
 
 use bisph_core::neighbours::CellGrid;
 use bisph_core::{Simulation, Wendland};
-use bisph_io::build::{build_simulation, CaseDim};
 use bisph_io::case::parse_case;
+use bisph_io::case::{build_simulation, CaseDim};
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DVec2, DVec3};
 use std::hint::black_box;

@@ -21,7 +21,7 @@
 //! (no renormalisation, gamma = 1), at 10k and 50k particles.
 
 use bisph_core::Simulation;
-use bisph_io::build::{build_simulation, CaseDim};
+use bisph_io::case::{build_simulation, CaseDim};
 use bisph_io::case::{parse_case, LoadedCase};
 use glam::{DVec2, DVec3};
 use serde_json::{json, Value};
@@ -426,7 +426,7 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
     let (text, dx) = match (config.case, config.dim) {
         (BenchCase::DamBreak, 2) => (bisph_io::case::DEFAULT_CASE, (WATER_AREA_2D / n).sqrt()),
         (BenchCase::DamBreak, _) => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
-        _ => (bisph_io::paper2_cases::TANK, (TANK_AREA / n).sqrt()),
+        _ => (bisph_validate::paper2::TANK, (TANK_AREA / n).sqrt()),
     };
     let mut overrides = vec![
         format!("resolution.dx={dx}"),

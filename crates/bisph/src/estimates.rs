@@ -113,7 +113,7 @@ mod tests {
     /// Every case of the registry has an estimate, and every estimate a case.
     #[test]
     fn every_validation_case_has_an_estimate() {
-        let cases = bisph_io::validate::registry();
+        let cases = bisph_validate::registry();
         for c in &cases {
             assert!(estimate(c.name()).is_some(), "no estimate for {}", c.name());
         }

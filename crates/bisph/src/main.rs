@@ -44,7 +44,7 @@ struct ShepardArgs {
     /// `discrete` (sum over the case's fluid particles), `geometric` (walls only, paper 2)
     /// or `integrated` (2-D: grad gamma of the walls integrated along a path from gamma = 1).
     #[arg(long, default_value = "geometric")]
-    method: bisph_io::shepard::ShepardMethod,
+    method: bisph_io::run::shepard::ShepardMethod,
     /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
@@ -274,7 +274,7 @@ fn nothing_to_resume(dir: &std::path::Path) -> Result<(), (u8, String)> {
             ),
         ));
     }
-    let checkpoint = dir.join(bisph_io::checkpoint::FILE_NAME);
+    let checkpoint = dir.join(bisph_io::run::checkpoint::FILE_NAME);
     if checkpoint.exists() {
         return Ok(());
     }
@@ -297,8 +297,8 @@ fn nothing_to_resume(dir: &std::path::Path) -> Result<(), (u8, String)> {
 
 fn shepard(args: ShepardArgs) -> Result<(), (u8, String)> {
     let loaded = load_case(Some(&args.case), &args.overrides).map_err(|e| (1, e.to_string()))?;
-    let table =
-        bisph_io::shepard::shepard_table(&loaded, &args.points, args.method).map_err(|e| (1, e))?;
+    let table = bisph_io::run::shepard::shepard_table(&loaded, &args.points, args.method)
+        .map_err(|e| (1, e))?;
     print!("{table}");
     Ok(())
 }
@@ -323,7 +323,7 @@ fn pack(args: PackArgs) -> Result<(), (u8, String)> {
             bar.tick();
         }
     };
-    let result = bisph_io::pack::pack_case(&loaded, &out, &mut report);
+    let result = bisph_io::run::pack::pack_case(&loaded, &out, &mut report);
     bar.finish_and_clear();
     let summary = result.map_err(|e| (1, e.to_string()))?;
     for b in &summary.blocks {
@@ -362,7 +362,7 @@ fn print_all(text: &str) -> Result<(), (u8, String)> {
 }
 
 fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
-    use bisph_io::validate::{markdown, registry, table};
+    use bisph_validate::{markdown, registry, table};
     let cases = registry();
     if args.list {
         use std::fmt::Write as _;

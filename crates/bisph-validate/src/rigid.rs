@@ -1,20 +1,14 @@
-//! Validation cases of free rigid bodies and 3-D walls from meshes: a floating box settling
-//! to its Archimedes draft, SPHERIC test 2 (paper 2, 3.2) and the Apollo capsule water
-//! landing (paper 1, 5.4).
+//! Validation cases of free rigid bodies in 2-D: a floating box settling to its Archimedes
+//! draft and a box held in place.
 
-use crate::paper1_cases::{column, line, load, plot, read_columns, run};
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::support::{column, line, load, plot, read_columns, run};
 use std::f64::consts::PI;
 use std::path::Path;
 
-/// The rigid-body and mesh-wall validation cases.
+/// The 2-D rigid-body validation cases.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
-    vec![
-        Box::new(FloatingBox),
-        Box::new(HeldBox),
-        Box::new(crate::spheric2::SphericTest2),
-        Box::new(Apollo),
-    ]
+    vec![Box::new(FloatingBox), Box::new(HeldBox)]
 }
 
 /// Mean of `y` where `t` lies in `[a, b]`.
@@ -416,23 +410,5 @@ impl ValidationCase for HeldBox {
             )],
             wall_seconds: 0.0,
         })
-    }
-}
-
-/// Apollo capsule water landing (paper 1, 5.4).
-pub struct Apollo;
-
-impl ValidationCase for Apollo {
-    fn name(&self) -> &'static str {
-        "apollo"
-    }
-    fn description(&self) -> &'static str {
-        "paper 1, 5.4: Apollo capsule water landing, free 6-DOF body; no particle inside, fluid + body energy drift with the body inside the iterations vs staggered"
-    }
-    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
-        crate::apollo::run_apollo(self.name(), quick, out)
-    }
-    fn in_quick_suite(&self) -> bool {
-        false
     }
 }

@@ -15,83 +15,18 @@
 //! - `summary.json` (per block: counts, iterations, timings, `|grad C|` before and after, the
 //!   first layer's distance to the wall); `pack-<k>.png` plots.
 
-use crate::build::CaseDim;
-use crate::case::{Case, CaseError, LoadedCase};
-use crate::output::{at, write_atomic};
-use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
-use crate::regions::BlockRegion;
-use crate::runner::RunError;
-use crate::vtk::{write_cells_vtu, write_points_vtu, DataArray};
-use bisph_core::packing::{IterationStats, PackParams, PackWalls, Packer, Stage};
+use crate::case::dim::CaseDim;
+use crate::case::fill::pack_block;
+use crate::case::schema::LoadedCase;
+use crate::formats::files::{at, write_atomic};
+use crate::formats::plot::{write_png, Plot, Series as PlotSeries, Style};
+use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray};
+use crate::run::error::RunError;
+use bisph_core::packing::{IterationStats, Stage};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
-
-/// BIPI parameters of a case for spacing `dx` (defaults of paper 4 where the case is silent).
-pub fn pack_params(case: &Case, dx: f64) -> PackParams {
-    let p = &case.pack;
-    let mut q = PackParams::new(dx, case.resolution.h_over_dx * dx);
-    q.mass = case.fluid.density * dx.powi(case.dim as i32);
-    q.diffusion = p.diffusion.unwrap_or(q.diffusion);
-    q.max_shift = p.max_shift.unwrap_or(q.max_shift);
-    q.push_radius = p.push_radius.or(q.push_radius);
-    q.stage_a_max = p.stage_a_max.unwrap_or(q.stage_a_max);
-    q.plateau_window = p.plateau_window.unwrap_or(q.plateau_window);
-    q.plateau_tolerance = p.plateau_tolerance.unwrap_or(q.plateau_tolerance);
-    q.freeze_distance = p.freeze_distance.unwrap_or(q.freeze_distance);
-    q.stage_c_iterations = p.stage_c_iterations.unwrap_or(q.stage_c_iterations);
-    q.stage_c_tolerance = p.stage_c_tolerance.unwrap_or(q.stage_c_tolerance);
-    q.step_damping = p.step_damping.unwrap_or(q.step_damping);
-    q.report_interval = p.report_interval.unwrap_or(q.report_interval);
-    q
-}
-
-/// One packed block.
-pub struct PackedBlock<V: CaseDim> {
-    /// Its region.
-    pub region: BlockRegion<V>,
-    /// The packer after the run (positions, walls, frozen flags).
-    pub packer: Packer<V>,
-    /// Metrics of every iteration.
-    pub history: Vec<IterationStats>,
-    /// Wall-clock seconds of step 2.
-    pub seconds: f64,
-}
-
-/// Packs block `k` of a case (steps 1 and 2 of paper 4).
-pub fn pack_block<V: CaseDim>(
-    loaded: &LoadedCase,
-    k: usize,
-    observe: &mut dyn FnMut(&IterationStats),
-) -> Result<PackedBlock<V>, CaseError> {
-    let case = &loaded.case;
-    let block = &case.fluid_block[k];
-    let key = format!("fluid_block[{k}]");
-    if block.shape == "particles" {
-        return Err(loaded.error(
-            &format!("{key}.shape"),
-            "a \"particles\" block has no geometry to pack",
-        ));
-    }
-    let dx = block.dx.unwrap_or(case.resolution.dx);
-    let params = pack_params(case, dx);
-    // The wall integrals are exact for elements of any size: elements as large as the
-    // support keep the count (and the cost) down.
-    let element_size = (dx * case.resolution.element_over_dx).max(2.0 * params.h);
-    let region = V::block_region(loaded, &key, block, dx, element_size)?;
-    let walls = PackWalls::new(&region.elements, 2.0 * params.h);
-    let mut packer = Packer::new(params, region.lattice.clone(), walls)
-        .map_err(|e| loaded.error(&key, e.to_string()))?;
-    let started = Instant::now();
-    let history = packer.run(|s| observe(s));
-    Ok(PackedBlock {
-        region,
-        packer,
-        history,
-        seconds: started.elapsed().as_secs_f64(),
-    })
-}
 
 /// Distances of the first layer to the wall, in units of `dx`.
 #[derive(Debug, Clone, Copy, Serialize, Default)]

@@ -1,152 +1,15 @@
-//! Output files of a run: CSV series (appended and flushed row by row, so a killed run keeps
-//! every completed row), VTK frames with `.pvd` indices, `summary.json`, plots.
+//! The output files of a run besides the CSV series: VTK frames of the fluid and the walls
+//! with their `.pvd` indices, and the rows of `body_<name>.csv` for free rigid bodies
+//! (position, attitude as quaternion and Euler angles, velocities and accelerations in world
+//! and body axes, energies and the fluid's load).
 
-use crate::vtk::{write_cells_vtu, write_points_vtu, DataArray, PvdCollection};
+use crate::formats::files::{at, OutputError};
+use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray, PvdCollection};
+use bisph_core::walls::bodies::angular_to_3d;
+use bisph_core::walls::FreeBody;
 use bisph_core::{Simulation, Vector};
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use glam::{DVec3, EulerRot};
 use std::path::{Path, PathBuf};
-
-/// An I/O failure, with the file it concerns.
-#[derive(Debug)]
-pub struct OutputError {
-    /// The file.
-    pub path: PathBuf,
-    /// What went wrong.
-    pub source: io::Error,
-}
-
-impl std::fmt::Display for OutputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "cannot write {}: {}", self.path.display(), self.source)
-    }
-}
-
-impl std::error::Error for OutputError {}
-
-/// Attaches the path to an I/O result.
-pub fn at<T>(path: &Path, r: io::Result<T>) -> Result<T, OutputError> {
-    r.map_err(|source| OutputError {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// Writes `bytes` to `path` through a temporary file (synced to disk) and a rename, so a crash
-/// leaves the old file or the new one, never a half-written one. On failure the temporary file
-/// is removed and the old file kept.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".tmp");
-    let tmp = path.with_file_name(name);
-    let written = (|| {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(OutputError {
-            path: path.to_path_buf(),
-            source: e,
-        });
-    }
-    at(path, std::fs::rename(&tmp, path))
-}
-
-/// A CSV time series: header first, then one flushed row per call (a killed run keeps every
-/// completed row). Its length in bytes is tracked so a resumed run can cut it back to a
-/// checkpoint.
-pub struct Series {
-    path: PathBuf,
-    out: BufWriter<File>,
-    len: u64,
-}
-
-impl Series {
-    /// Creates the file with its header.
-    pub fn create(path: PathBuf, header: &[String]) -> Result<Self, OutputError> {
-        let file = at(&path, File::create(&path))?;
-        let mut s = Series {
-            path,
-            out: BufWriter::new(file),
-            len: 0,
-        };
-        let line = header.join(",");
-        s.line(&line)?;
-        Ok(s)
-    }
-
-    /// Reopens an existing series cut back to its first `len` bytes (a checkpoint's length),
-    /// appending after them.
-    pub fn reopen(path: PathBuf, len: u64) -> Result<Self, OutputError> {
-        let file = at(
-            &path,
-            std::fs::OpenOptions::new()
-                .read(true)
-                .write(true)
-                .open(&path),
-        )?;
-        let found = at(&path, file.metadata())?.len();
-        if found < len {
-            return Err(OutputError {
-                path,
-                source: io::Error::new(
-                    io::ErrorKind::UnexpectedEof,
-                    format!("the file has {found} bytes, the checkpoint expects {len}"),
-                ),
-            });
-        }
-        at(&path, file.set_len(len))?;
-        let mut file = file;
-        at(&path, io::Seek::seek(&mut file, io::SeekFrom::End(0)))?;
-        Ok(Series {
-            path,
-            out: BufWriter::new(file),
-            len,
-        })
-    }
-
-    /// Bytes written so far (header included).
-    pub fn len(&self) -> u64 {
-        self.len
-    }
-
-    /// `true` before the header is written (never, once created).
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    fn line(&mut self, line: &str) -> Result<(), OutputError> {
-        at(
-            &self.path,
-            writeln!(self.out, "{line}").and_then(|_| self.out.flush()),
-        )?;
-        self.len += line.len() as u64 + 1;
-        Ok(())
-    }
-
-    /// Appends one row (full precision) and flushes it.
-    pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
-        let mut line = String::with_capacity(24 * values.len());
-        for (k, v) in values.iter().enumerate() {
-            if k > 0 {
-                line.push(',');
-            }
-            line.push_str(&format!("{v:e}"));
-        }
-        self.line(&line)
-    }
-
-    /// Appends a row whose second column is a name.
-    pub fn named_row(&mut self, t: f64, name: &str, values: &[f64]) -> Result<(), OutputError> {
-        let mut line = format!("{t:e},{name}");
-        for v in values {
-            line.push_str(&format!(",{v:e}"));
-        }
-        self.line(&line)
-    }
-}
 
 /// VTK frames of the fluid and the walls with their `.pvd` indices.
 pub struct Frames {
@@ -304,4 +167,88 @@ impl Frames {
         self.times.push(sim.time);
         self.write_indices()
     }
+}
+
+/// Columns of `body_<name>.csv`. World axes: `x..`, `vx..`, `ax..`, `wx..` (angular velocity),
+/// `alphax..`, `fx..`, `mx..` (fluid force and torque about the centre of mass); body axes:
+/// `u, v, w` (velocity), `bax..` (acceleration), `p, q, r` (angular velocity), `balphax..`;
+/// attitude: quaternion `qw, qx, qy, qz` (body to world) and Euler angles `roll, pitch, yaw`
+/// in degrees (z-y-x sequence: yaw about z, then pitch about y, then roll about x);
+/// `kinetic` (translation + rotation) and `potential` (gravity, zero at the start) [J].
+pub const FREE_BODY_COLUMNS: [&str; 43] = [
+    "t",
+    "x",
+    "y",
+    "z",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "roll",
+    "pitch",
+    "yaw",
+    "vx",
+    "vy",
+    "vz",
+    "u",
+    "v",
+    "w",
+    "wx",
+    "wy",
+    "wz",
+    "p",
+    "q",
+    "r",
+    "ax",
+    "ay",
+    "az",
+    "bax",
+    "bay",
+    "baz",
+    "alphax",
+    "alphay",
+    "alphaz",
+    "balphax",
+    "balphay",
+    "balphaz",
+    "kinetic",
+    "potential",
+    "fx",
+    "fy",
+    "fz",
+    "mx",
+    "my",
+    "mz",
+];
+
+/// One row of `body_<name>.csv`.
+pub fn free_body_row<V: Vector>(
+    t: f64,
+    b: &FreeBody,
+    centre: V,
+    force: V,
+    torque: V::Angular,
+) -> Vec<f64> {
+    let q = b.attitude;
+    let inv = q.inverse();
+    let (yaw, pitch, roll) = q.to_euler(EulerRot::ZYX);
+    let x = DVec3::from_array(centre.to_xyz());
+    let f = DVec3::from_array(force.to_xyz());
+    let m = angular_to_3d::<V>(torque);
+    let mut row = vec![t];
+    row.extend(x.to_array());
+    row.extend([q.w, q.x, q.y, q.z]);
+    row.extend([roll.to_degrees(), pitch.to_degrees(), yaw.to_degrees()]);
+    row.extend(b.velocity.to_array());
+    row.extend((inv * b.velocity).to_array());
+    row.extend(b.world_angular_velocity().to_array());
+    row.extend(b.angular_velocity.to_array());
+    row.extend(b.acceleration.to_array());
+    row.extend((inv * b.acceleration).to_array());
+    row.extend(b.world_angular_acceleration().to_array());
+    row.extend(b.angular_acceleration.to_array());
+    row.extend([b.kinetic_energy(), b.potential_energy()]);
+    row.extend(f.to_array());
+    row.extend(m.to_array());
+    row
 }

@@ -1,11 +1,11 @@
 //! Validation cases of paper 3 (Mayrhofer et al. 2013), sections 5-6: the flux-driven
 //! Poiseuille flow (eq 58 against eq 63) and the 1-D wave equation with Robin walls.
 
-use crate::build::build_simulation;
-use crate::paper1_cases::{line, load, plot};
-use crate::plot::{Series, Style};
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::support::{line, load, plot};
 use bisph_core::Simulation;
+use bisph_io::case::build_simulation;
+use bisph_io::formats::plot::{Series, Style};
 use glam::DVec2;
 use std::path::Path;
 

@@ -13,16 +13,16 @@
 //! The energy-budget channel runs in a closed box (its side walls are parallel to the flow, a
 //! symmetry of the exact solution, and its energy budget is compared on the same particles).
 
-use crate::build::build_simulation;
-use crate::case::parse_case;
-use crate::plot::line_plot_png as plot;
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::bi::segment::segment_kernel_integral;
 use bisph_core::geometry::{box_elements_2d, winding_number};
 use bisph_core::neighbours::CellGrid;
 use bisph_core::quadrature::gauss_legendre;
 use bisph_core::walls::{geometric_shepard, usaw};
 use bisph_core::{BoundaryElements, Simulation, Wendland};
+use bisph_io::case::build_simulation;
+use bisph_io::case::parse_case;
+use bisph_io::formats::plot::line_plot_png as plot;
 use glam::DVec2;
 use std::f64::consts::PI;
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! `[settle]`: from the case to the settling parameters, the checks that settling applies,
 //! and what `summary.json` reports of it.
 
-use crate::case::{CaseError, LoadedCase};
+use crate::case::schema::LoadedCase;
 use bisph_core::simulation::{SettleOutcome, SettleParams, SettleReport};
 use bisph_core::{Simulation, Vector};
 use serde::{Deserialize, Serialize};
@@ -58,52 +58,6 @@ impl SettlingSummary {
             max_displacement: report.max_displacement,
         }
     }
-}
-
-/// Checks `[settle]`: positive numbers, and, when enabled, a case that starts at rest under
-/// gravity with fixed walls and no driving force.
-pub fn check(loaded: &LoadedCase) -> Result<(), CaseError> {
-    let c = &loaded.case;
-    let s = &c.settle;
-    for (key, value) in [
-        ("settle.damping", s.damping),
-        ("settle.tolerance", s.tolerance),
-        ("settle.max_time", s.max_time),
-    ] {
-        if let Some(v) = value {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(loaded.error(key, format!("expected a positive number, found {v}")));
-            }
-        }
-    }
-    if !s.enabled {
-        return Ok(());
-    }
-    let refuse = |why: String| {
-        Err(loaded.error(
-            "settle.enabled",
-            format!("settling needs fluid at rest under gravity with fixed walls: {why}"),
-        ))
-    };
-    if c.fluid.gravity.iter().all(|&g| g == 0.0) {
-        return refuse("the case has no gravity".into());
-    }
-    if c.flux.is_some() {
-        return refuse("the case has a flux-driving force ([flux])".into());
-    }
-    for (k, block) in c.fluid_block.iter().enumerate() {
-        if let Some(v) = &block.velocity {
-            if v.iter().any(|&x| x != 0.0) {
-                return refuse(format!("fluid_block[{k}].velocity is not zero"));
-            }
-        }
-    }
-    for (k, body) in c.body.iter().enumerate() {
-        if body.motion.is_some() || body.piston.is_some() || body.free.is_some() {
-            return refuse(format!("body[{k}] (\"{}\") moves", body.name));
-        }
-    }
-    Ok(())
 }
 
 /// The settling parameters of a built simulation (`None` when `[settle]` is off).

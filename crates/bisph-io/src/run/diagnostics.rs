@@ -14,8 +14,8 @@
 //! Particles are named by their original index (`id`), stable across reorderings. When several
 //! particles trip at once they are listed worst first.
 
-use crate::case::DiagnosticsSection;
-use crate::checkpoint::SimState;
+use crate::case::schema::DiagnosticsSection;
+use crate::run::checkpoint::SimState;
 use bisph_core::walls::Motion;
 use bisph_core::{SimError, Simulation, Vector};
 use rayon::prelude::*;
@@ -566,15 +566,15 @@ pub fn energy_growth<V: Vector>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::build::build_simulation;
-    use crate::case::parse_case;
+    use crate::case::build::build_simulation;
+    use crate::case::load::parse_case;
     use glam::DVec2;
 
     /// A particle that creeps behind a wall by steps far below the path test's depth
     /// trips the watch once it lies more than h/100 behind; at rest in front it does not.
     #[test]
     fn gradual_crossing_trips_the_watch() {
-        let text = include_str!("../../../cases/dam-break-2d.toml");
+        let text = include_str!("../../../../cases/dam-break-2d.toml");
         let loaded = parse_case("<dam-break-2d>", text, &["resolution.dx=0.02".into()]).unwrap();
         let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
         let mut watch = Watch::new(loaded.case.diagnostics.clone());

@@ -2,8 +2,8 @@
 //! twice, with the body inside the midpoint iterations and with the staggered coupling of
 //! the paper, to compare the fluid + body energy drift.
 
-use crate::paper1_cases::{column, line, load, plot, read_columns, run};
-use crate::validate::{CaseReport, Check, Tolerance};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::support::{column, line, load, plot, read_columns, run};
 use glam::{DQuat, DVec3};
 use std::path::Path;
 
@@ -168,4 +168,27 @@ pub fn run_apollo(name: &str, quick: bool, out: &Path) -> Result<CaseReport, Str
         )],
         wall_seconds: 0.0,
     })
+}
+
+/// Apollo capsule water landing (paper 1, 5.4).
+pub struct Apollo;
+
+impl ValidationCase for Apollo {
+    fn name(&self) -> &'static str {
+        "apollo"
+    }
+    fn description(&self) -> &'static str {
+        "paper 1, 5.4: Apollo capsule water landing, free 6-DOF body; no particle inside, fluid + body energy drift with the body inside the iterations vs staggered"
+    }
+    fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
+        run_apollo(self.name(), quick, out)
+    }
+    fn in_quick_suite(&self) -> bool {
+        false
+    }
+}
+
+/// The Apollo case.
+pub fn cases() -> Vec<Box<dyn ValidationCase>> {
+    vec![Box::new(Apollo)]
 }

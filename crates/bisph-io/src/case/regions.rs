@@ -2,9 +2,11 @@
 //! case's transform, minus its holes; boundary elements with normals out of the region, the
 //! lattice of BIPI step 1, and a strict point-in-region test.
 
-use crate::case::{unit_factor, Angles, LoadedCase, ShapeSpec};
-use crate::shapes::{read_polygon_file, read_stl, Transform};
-use crate::CaseError;
+use crate::case::schema::LoadedCase;
+
+use crate::case::error::CaseError;
+use crate::case::schema::{unit_factor, Angles, ShapeSpec};
+use crate::formats::mesh_files::{read_polygon_file, read_stl, Transform};
 use bisph_core::geometry::ElementShape;
 use bisph_core::region::{PolygonRegion, TriMesh};
 use glam::{DVec2, DVec3};

@@ -3,10 +3,12 @@
 //! case's transform; checked (closed, consistent, not inverted, no degenerate face) and
 //! oriented so the element normals point out of the fluid (paper 1, 5.4).
 
-use crate::case::{LoadedCase, WallSpec};
-use crate::regions::transform_from;
-use crate::shapes::{read_obj, read_stl_facets, Transform};
-use crate::CaseError;
+use crate::case::schema::LoadedCase;
+
+use crate::case::error::CaseError;
+use crate::case::regions::transform_from;
+use crate::case::schema::WallSpec;
+use crate::formats::mesh_files::{read_obj, read_stl_facets, Transform};
 use bisph_core::geometry::ElementShape;
 use bisph_core::surface::{Capsule, Surface};
 use glam::DVec3;
@@ -36,7 +38,7 @@ pub fn check_wall(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result<(), Ca
         }
     }
     if let Some(u) = &w.units {
-        if crate::case::unit_factor(u).is_none() {
+        if crate::case::schema::unit_factor(u).is_none() {
             return Err(loaded.error(
                 &format!("{key}.units"),
                 format!("expected \"m\", \"cm\" or \"mm\", found \"{u}\""),
@@ -59,7 +61,7 @@ pub fn check_wall(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result<(), Ca
             ));
         }
     }
-    if let Some(crate::case::Angles::Many(a)) = &w.rotate {
+    if let Some(crate::case::schema::Angles::Many(a)) = &w.rotate {
         if a.len() != 3 {
             return Err(loaded.error(
                 &format!("{key}.rotate"),
@@ -192,8 +194,8 @@ pub const MAX_MESH_ELEMENTS: f64 = 2e7;
 /// [`MAX_MESH_ELEMENTS`] or the memory available.
 pub fn checked_elements(surface: &Surface, size: f64) -> Result<Vec<ElementShape<DVec3>>, String> {
     let count = surface.element_count(size);
-    let bytes = count * crate::resources::bytes_per_element(3) as f64;
-    let available = crate::resources::available_memory().map_or(f64::INFINITY, |b| b as f64);
+    let bytes = count * crate::case::resources::bytes_per_element(3) as f64;
+    let available = crate::case::resources::available_memory().map_or(f64::INFINITY, |b| b as f64);
     if !(count <= MAX_MESH_ELEMENTS && bytes <= available) {
         return Err(format!(
             "the mesh makes {count:.3e} boundary elements of size {size} (about {:.3} GiB; at most \

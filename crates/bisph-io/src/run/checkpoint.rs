@@ -25,7 +25,7 @@
 //! CSV lengths, free bodies' CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
 //! configuration) are rebuilt from the case text stored in the checkpoint.
 
-use crate::output::OutputError;
+use crate::formats::files::OutputError;
 use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
 use bisph_core::walls::{FreeBody, Motion};
@@ -1082,7 +1082,7 @@ pub fn read<V: Vector>(path: &Path) -> Result<Checkpoint<V>, CheckpointError> {
 /// Writes the checkpoint to `path` through a temporary file, synced, then renamed, so a crash
 /// leaves either the old checkpoint or the new one, never a half-written file.
 pub fn write<V: Vector>(path: &Path, c: &Checkpoint<V>) -> Result<(), OutputError> {
-    crate::output::write_atomic(path, &encode(c))
+    crate::formats::files::write_atomic(path, &encode(c))
 }
 
 #[cfg(test)]

@@ -3,9 +3,9 @@
 //! average within 10%; mean `|grad C|` over all particles at least halved from the lattice;
 //! largest `|grad C|` lowered.
 
-use crate::case::load_case;
-use crate::pack::pack_case;
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use bisph_io::case::load_case;
+use bisph_io::run::pack::pack_case;
 use std::path::{Path, PathBuf};
 
 /// A packing case: a case file of `cases/` and its quick-resolution overrides.

@@ -1,12 +1,18 @@
 //! Runs a case to its end time, writing the outputs of the command-line contract.
 
-use crate::build::{build_simulation, CaseDim};
-use crate::case::{CaseError, LoadedCase};
-use crate::checkpoint::{self, Checkpoint, CheckpointError, RunCounters, SimState};
-use crate::diagnostics::{energy_growth, from_sim_error, Diagnosis, Watch};
-use crate::output::{at, write_atomic, Frames, OutputError, Series};
-use crate::plot::{write_png, Plot, Series as PlotSeries, Style};
-use crate::settle::SettlingSummary;
+use crate::case::build::build_simulation;
+
+use crate::case::dim::CaseDim;
+use crate::case::schema::LoadedCase;
+use crate::formats::files::{at, write_atomic, OutputError};
+use crate::formats::plot::{write_png, Plot, Series as PlotSeries, Style};
+use crate::formats::series::Series;
+use crate::run::checkpoint;
+use crate::run::checkpoint::{Checkpoint, CheckpointError, RunCounters, SimState};
+use crate::run::diagnostics::{energy_growth, from_sim_error, Diagnosis, Watch};
+use crate::run::error::RunError;
+use crate::run::outputs::Frames;
+use crate::run::settle::SettlingSummary;
 use bisph_core::energy::energy_scale;
 use bisph_core::walls::Motion;
 use bisph_core::Simulation;
@@ -14,74 +20,6 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
-
-/// Why a run failed.
-#[derive(Debug)]
-pub enum RunError {
-    /// The case is wrong.
-    Case(CaseError),
-    /// An output could not be written (the last checkpoint on disk is kept).
-    Output(OutputError),
-    /// A checkpoint was refused.
-    Checkpoint(CheckpointError),
-    /// The case needs more memory than the machine has.
-    Resources(String),
-    /// The run was interrupted by a signal; a checkpoint was written.
-    Interrupted {
-        /// Step reached.
-        step: u64,
-        /// Time reached.
-        time: f64,
-        /// The checkpoint to resume from.
-        checkpoint: PathBuf,
-    },
-    /// A divergence watch tripped (outputs up to the last good state are kept;
-    /// `diagnostics.json` says what happened).
-    Stopped(Box<Diagnosis>),
-}
-
-impl RunError {
-    /// Exit code of `bisph run` for this error (see the table in `docs/outputs-and-errors.md`).
-    pub fn exit_code(&self) -> u8 {
-        match self {
-            RunError::Case(_) => 1,
-            RunError::Output(_) => 4,
-            RunError::Checkpoint(_) => 5,
-            RunError::Resources(_) => 6,
-            RunError::Interrupted { .. } => 10,
-            RunError::Stopped(d) => d.exit_code,
-        }
-    }
-}
-
-impl std::fmt::Display for RunError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RunError::Case(e) => write!(f, "{e}"),
-            RunError::Output(e) => write!(f, "{e}"),
-            RunError::Checkpoint(e) => write!(f, "{e}"),
-            RunError::Resources(e) => write!(f, "{e}"),
-            RunError::Interrupted {
-                step,
-                time,
-                checkpoint,
-            } => write!(
-                f,
-                "interrupted at step {step} (t = {time:.6e} s); checkpoint written to {}",
-                checkpoint.display()
-            ),
-            RunError::Stopped(d) => write!(f, "simulation stopped: {d}"),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
-
-impl From<OutputError> for RunError {
-    fn from(e: OutputError) -> Self {
-        RunError::Output(e)
-    }
-}
 
 /// Wall-clock seconds of the time loop by phase.
 #[derive(Debug, Clone, Serialize)]
@@ -110,12 +48,6 @@ impl PhaseSeconds {
             integration: t.steps - t.neighbours - t.rates,
             output: wall_seconds - t.steps,
         }
-    }
-}
-
-impl From<CheckpointError> for RunError {
-    fn from(e: CheckpointError) -> Self {
-        RunError::Checkpoint(e)
     }
 }
 
@@ -212,7 +144,7 @@ fn settle_or_recall<V: CaseDim>(
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = crate::settle::settle(loaded, sim)
+    let settling = crate::run::settle::settle(loaded, sim)
         .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
     if let Some(s) = &settling {
         let text = serde_json::to_string_pretty(s).expect("a settling report serialises");
@@ -285,7 +217,7 @@ pub fn resume_case(dir: &Path) -> Result<LoadedCase, RunError> {
             (c.case_source, c.case_text)
         }
     };
-    crate::case::parse_case(&source, &text, &[]).map_err(RunError::Case)
+    crate::case::load::parse_case(&source, &text, &[]).map_err(RunError::Case)
 }
 
 /// The open CSV series of a run, in the order of [`checkpoint::SERIES_FILES`].
@@ -322,7 +254,7 @@ pub fn run<V: CaseDim>(
     options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
-    crate::resources::check_memory(loaded).map_err(RunError::Resources)?;
+    crate::case::resources::check_memory(loaded).map_err(RunError::Resources)?;
     let mut sim: Simulation<V> = build_simulation(loaded).map_err(RunError::Case)?;
     at(out, std::fs::create_dir_all(out))?;
     let case = &loaded.case;
@@ -478,7 +410,7 @@ pub fn run<V: CaseDim>(
             for path in &free_csv_paths {
                 free_csv.push(Series::create(
                     path.clone(),
-                    &crate::bodies_out::FREE_BODY_COLUMNS.map(String::from),
+                    &crate::run::outputs::FREE_BODY_COLUMNS.map(String::from),
                 )?);
             }
             // A stale checkpoint or report from an earlier run in this folder must not be
@@ -609,7 +541,7 @@ pub fn run<V: CaseDim>(
                 for (b, body) in sim.walls.bodies.iter().enumerate() {
                     if let Motion::Free(f) = &body.motion {
                         let centre = body.centre + body.motion.kinematics(t).displacement;
-                        let row = crate::bodies_out::free_body_row::<V>(
+                        let row = crate::run::outputs::free_body_row::<V>(
                             t, f, centre, loads[b].0, loads[b].1,
                         );
                         free_csv[k].row(&row)?;

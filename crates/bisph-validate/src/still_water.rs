@@ -10,11 +10,10 @@
 //! mid-width (the pressure it applies to the wall) within 1% of `rho g H` (time mean over the
 //! second half); no particle behind a wall.
 
-use crate::build::{build_simulation, CaseDim};
-use crate::case::parse_case;
-use crate::plot::line_plot_png as plot;
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::{Simulation, Vector};
+use bisph_io::case::{build_simulation, parse_case, CaseDim};
+use bisph_io::formats::plot::line_plot_png as plot;
 use glam::{DVec2, DVec3};
 use std::path::Path;
 
@@ -140,7 +139,7 @@ fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<Still
     let source = format!("<still-water {}>", tank.name);
     let loaded = parse_case(&source, tank.text, &overrides).map_err(|e| e.to_string())?;
     let mut sim: Simulation<V> = build_simulation(&loaded).map_err(|e| e.to_string())?;
-    let settling = match crate::settle::settle(&loaded, &mut sim) {
+    let settling = match bisph_io::run::settle::settle(&loaded, &mut sim) {
         Ok(Some(s)) => format!(
             "settling {} after {:.2} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(gH)",
             s.outcome, s.time, s.steps, s.wall_seconds, s.max_speed_relative

@@ -1,8 +1,8 @@
 //! SPHERIC test 2 (Kleefsman et al. 2005; paper 2, 3.2): 3-D dam break against a box,
 //! pressures P1-P4 and heights H2, H4 against the MARIN experiment.
 
-use crate::paper1_cases::{column, line, load, plot, read_columns, run};
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::support::{column, line, load, plot, read_columns, run};
 use std::path::Path;
 
 /// The experiment file (see `shared/data/spheric-test2-kleefsman/PROVENANCE.md`).
@@ -212,4 +212,9 @@ impl ValidationCase for SphericTest2 {
             wall_seconds: 0.0,
         })
     }
+}
+
+/// The SPHERIC test 2 case.
+pub fn cases() -> Vec<Box<dyn ValidationCase>> {
+    vec![Box::new(SphericTest2)]
 }

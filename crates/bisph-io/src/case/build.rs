@@ -1,143 +1,32 @@
 //! From a checked case to a ready [`Simulation`].
 
-use crate::case::ToleranceReference;
-use crate::case::{Case, CaseError, FluidBlock, InitialPressure, LoadedCase, WallSpec};
-use crate::regions::BlockRegion;
-use bisph_core::bi::ElementIntegrals as WallIntegrals;
+use crate::case::bodies::free_bodies;
+use crate::case::dim::CaseDim;
+use crate::case::fill::{block_points, relax_for_usaw};
+
+use crate::case::error::CaseError;
+use crate::case::schema::LoadedCase;
+use crate::case::schema::ToleranceReference;
+use crate::case::schema::{Case, FluidBlock, InitialPressure};
 use bisph_core::energy::{energy_scale, fluid_energies};
-use bisph_core::geometry::{self, ElementShape};
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::ShepardKind;
-use bisph_core::walls::usaw::{self, FitSetting, WallInterpolation};
-use bisph_core::walls::{
-    Body, BoundaryElements, Coupling, FreeBody, Motion, Piston, PrescribedMotion, Stretch, Walls,
-};
+use bisph_core::walls::usaw::WallInterpolation;
+use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
-use glam::{DVec2, DVec3};
-
-/// What differs between 2-D and 3-D when building a case.
-pub trait CaseDim: Vector + WallIntegrals {
-    /// The region of a block (shape minus holes, transformed) for spacing `dx`.
-    fn block_region(
-        loaded: &LoadedCase,
-        key: &str,
-        block: &FluidBlock,
-        dx: f64,
-        element_size: f64,
-    ) -> Result<BlockRegion<Self>, CaseError>;
-    /// Boundary elements of one `[[wall]]` (`key`) of about `size`.
-    fn wall_shapes(
-        loaded: &LoadedCase,
-        key: &str,
-        wall: &WallSpec,
-        size: f64,
-    ) -> Result<Vec<ElementShape<Self>>, CaseError>;
-    /// Lattice points of one `[[fluid_block]]`.
-    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self>;
-}
-
-fn points2(points: &Option<Vec<Vec<f64>>>) -> Vec<DVec2> {
-    points
-        .iter()
-        .flatten()
-        .map(|p| DVec2::from_slice(p))
-        .collect()
-}
-
-impl CaseDim for DVec2 {
-    fn block_region(
-        loaded: &LoadedCase,
-        key: &str,
-        block: &FluidBlock,
-        dx: f64,
-        element_size: f64,
-    ) -> Result<BlockRegion<Self>, CaseError> {
-        crate::regions::region_2d(
-            loaded,
-            key,
-            &block.shape_spec(),
-            &block.hole,
-            dx,
-            element_size,
-        )
-    }
-    fn wall_shapes(
-        _loaded: &LoadedCase,
-        _key: &str,
-        wall: &WallSpec,
-        size: f64,
-    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
-        Ok(match wall.shape.as_str() {
-            "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
-            "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
-            _ => geometry::polyline_elements(&points2(&wall.points), false, size),
-        })
-    }
-    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
-        match block.shape.as_str() {
-            "box" => geometry::lattice_box(vec2(&block.min), vec2(&block.max), dx),
-            _ => geometry::lattice_polygon(&points2(&block.points), dx),
-        }
-    }
-}
-
-impl CaseDim for DVec3 {
-    fn block_region(
-        loaded: &LoadedCase,
-        key: &str,
-        block: &FluidBlock,
-        dx: f64,
-        element_size: f64,
-    ) -> Result<BlockRegion<Self>, CaseError> {
-        crate::regions::region_3d(
-            loaded,
-            key,
-            &block.shape_spec(),
-            &block.hole,
-            dx,
-            element_size,
-        )
-    }
-    fn wall_shapes(
-        loaded: &LoadedCase,
-        key: &str,
-        wall: &WallSpec,
-        size: f64,
-    ) -> Result<Vec<ElementShape<Self>>, CaseError> {
-        match wall.shape.as_str() {
-            "mesh" | "capsule" => crate::mesh_walls::wall_elements(loaded, key, wall, size),
-            _ => Ok(geometry::box_elements_3d(
-                vec3(&wall.min),
-                vec3(&wall.max),
-                &wall.open,
-                size,
-            )),
-        }
-    }
-    fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
-        geometry::lattice_box(vec3(&block.min), vec3(&block.max), dx)
-    }
-}
-
-fn vec2(v: &Option<Vec<f64>>) -> DVec2 {
-    DVec2::from_slice(v.as_deref().unwrap_or(&[0.0, 0.0]))
-}
-fn vec3(v: &Option<Vec<f64>>) -> DVec3 {
-    DVec3::from_slice(v.as_deref().unwrap_or(&[0.0, 0.0, 0.0]))
-}
 
 /// The equation of state of a case.
 pub fn eos_of(case: &Case) -> Eos {
     let f = &case.fluid;
     match f.eos {
-        crate::case::EosName::Linear => Eos::Linear {
+        crate::case::schema::EosName::Linear => Eos::Linear {
             rho0: f.density,
             c0: f.sound_speed,
             p0: f.background_pressure,
         },
-        crate::case::EosName::Tait => Eos::Tait {
+        crate::case::schema::EosName::Tait => Eos::Tait {
             rho0: f.density,
             c0: f.sound_speed,
             p0: f.background_pressure,
@@ -145,96 +34,6 @@ pub fn eos_of(case: &Case) -> Eos {
         },
     }
 }
-
-/// The initial particle positions of block `k`: read from a file (`shape = "particles"`),
-/// packed with BIPI (`fill = "bipi"`) or on the lattice.
-pub fn block_points<V: CaseDim>(
-    loaded: &LoadedCase,
-    k: usize,
-    dx: f64,
-) -> Result<Vec<V>, CaseError> {
-    let block = &loaded.case.fluid_block[k];
-    let key = format!("fluid_block[{k}]");
-    if block.shape == "particles" {
-        let file = block.file.clone().unwrap_or_default();
-        let rows = crate::shapes::read_particles(&loaded.resolve(&file), V::DIM)
-            .map_err(|m| loaded.error(&format!("{key}.file"), m))?;
-        return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
-    }
-    if block.bipi() {
-        let packed = crate::pack::pack_block::<V>(loaded, k, &mut |_| {})?;
-        return Ok(packed.packer.positions);
-    }
-    let plain = matches!(block.shape.as_str(), "box" | "polygon")
-        && block.hole.is_empty()
-        && crate::regions::transform_of(&block.shape_spec()).is_identity();
-    if plain {
-        return Ok(V::fill(block, dx));
-    }
-    let element_size = dx * loaded.case.resolution.element_over_dx;
-    Ok(V::block_region(loaded, &key, block, dx, element_size)?.lattice)
-}
-
-/// `fill = "usaw"`: a start that fits usaw walls. Relaxes a block's lattice `points` in two
-/// stages ([`bisph_core::walls::usaw`]): [`relax_positions`](bisph_core::walls::usaw::relax_positions)
-/// zeroes the operators' zero-order residual (a constant pressure exerts no force; the free
-/// surface at height `surface` is a mirror), then, under gravity,
-/// [`balance_positions`](bisph_core::walls::usaw::balance_positions) zeroes the acceleration
-/// at hydrostatic rest (every pressure the still water's at its height, the equation of
-/// state's `dp/dd = rho(p) g`). At most [`USAW_FILL_ITERATIONS`] iterations each. The vertex
-/// particles are those of all walls at `rho0`; other blocks are not seen.
-fn relax_for_usaw<V: Vector>(
-    kernel: &Wendland,
-    dx: f64,
-    points: &mut [V],
-    elements: &BoundaryElements<V>,
-    gravity: V,
-    surface: f64,
-    eos: &Eos,
-) {
-    let Some(vertices) = usaw::Vertices::from_elements(
-        elements,
-        eos.rho0(),
-        kernel.support,
-        dx,
-        bisph_core::neighbours::Periodicity::none(),
-    ) else {
-        return;
-    };
-    let g = gravity.length();
-    let up = if g > 0.0 {
-        gravity * (-1.0 / g)
-    } else {
-        V::ZERO
-    };
-    let fit = FitSetting {
-        kernel,
-        dx,
-        volume: dx.powi(V::DIM as i32),
-        vertices: &vertices,
-        elements,
-        up,
-        surface,
-        max_iterations: USAW_FILL_ITERATIONS,
-    };
-    // Without gravity there is no free surface to mirror.
-    let mirror = if g > 0.0 { surface } else { f64::INFINITY };
-    usaw::relax_positions(
-        &FitSetting {
-            surface: mirror,
-            ..fit
-        },
-        points,
-    );
-    if g > 0.0 {
-        let pressure = |d: f64| eos.hydrostatic_pressure(g, d);
-        let density = |p: f64| eos.density(p).unwrap_or(eos.rho0());
-        usaw::balance_positions(&fit, points, g, &pressure, &density);
-    }
-}
-
-/// Most iterations of each stage of `fill = "usaw"`.
-pub const USAW_FILL_ITERATIONS: usize = 5000;
 
 /// Builds the simulation of a checked case.
 pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, CaseError> {
@@ -314,8 +113,12 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             }
         }
         if V::DIM == 3 && body > 0 && (w.shape == "mesh" || w.shape == "capsule") {
-            let mut surface =
-                crate::mesh_walls::wall_surface(loaded, &format!("wall[{k}]"), w, element_size)?;
+            let mut surface = crate::case::mesh_walls::wall_surface(
+                loaded,
+                &format!("wall[{k}]"),
+                w,
+                element_size,
+            )?;
             if surface.volume() < 0.0 {
                 surface.flip();
             }
@@ -407,7 +210,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
         let surface = block.surface.unwrap_or_else(|| {
             if matches!(block.shape.as_str(), "box" | "polygon")
-                && crate::regions::transform_of(&block.shape_spec()).is_identity()
+                && crate::case::regions::transform_of(&block.shape_spec()).is_identity()
             {
                 block_top(block, gravity, g)
             } else {
@@ -465,8 +268,8 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                 ));
             };
             let mass = match block.mass {
-                crate::case::MassRule::Reference => mass,
-                crate::case::MassRule::Initial => rho * dx.powi(V::DIM as i32),
+                crate::case::schema::MassRule::Reference => mass,
+                crate::case::schema::MassRule::Initial => rho * dx.powi(V::DIM as i32),
             };
             fluid.push(r, velocity, rho, mass, p);
         }
@@ -533,40 +336,46 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         domain_min,
         domain_max,
         wall_model: match case.boundary {
-            crate::case::BoundaryName::Energy => WallModelChoice::Energy,
-            crate::case::BoundaryName::Bi => WallModelChoice::ShepardBi(match case.shepard {
-                crate::case::ShepardName::Discrete => ShepardKind::Discrete,
-                crate::case::ShepardName::Geometric => ShepardKind::Geometric,
-                crate::case::ShepardName::Integrated => ShepardKind::Integrated,
-            }),
-            crate::case::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
+            crate::case::schema::BoundaryName::Energy => WallModelChoice::Energy,
+            crate::case::schema::BoundaryName::Bi => {
+                WallModelChoice::ShepardBi(match case.shepard {
+                    crate::case::schema::ShepardName::Discrete => ShepardKind::Discrete,
+                    crate::case::schema::ShepardName::Geometric => ShepardKind::Geometric,
+                    crate::case::schema::ShepardName::Integrated => ShepardKind::Integrated,
+                })
+            }
+            crate::case::schema::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
                 interpolation: match case.usaw.wall_interpolation {
-                    crate::case::WallInterpolationName::Shepard => WallInterpolation::Shepard,
-                    crate::case::WallInterpolationName::Neumann => WallInterpolation::Neumann,
-                    crate::case::WallInterpolationName::Hydrostatic => {
+                    crate::case::schema::WallInterpolationName::Shepard => {
+                        WallInterpolation::Shepard
+                    }
+                    crate::case::schema::WallInterpolationName::Neumann => {
+                        WallInterpolation::Neumann
+                    }
+                    crate::case::schema::WallInterpolationName::Hydrostatic => {
                         WallInterpolation::Hydrostatic
                     }
                 },
-                geometric_gamma: case.usaw.gamma == crate::case::UsawGammaName::Geometric,
+                geometric_gamma: case.usaw.gamma == crate::case::schema::UsawGammaName::Geometric,
                 no_wall_tension: !case.usaw.wall_tension,
             }),
         },
         diffusion: match case.fluid.diffusion {
-            crate::case::DiffusionName::Delta => DiffusionChoice::Delta,
-            crate::case::DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
+            crate::case::schema::DiffusionName::Delta => DiffusionChoice::Delta,
+            crate::case::schema::DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
                 eta: case.fluid.eta,
             },
-            crate::case::DiffusionName::Ferrari => DiffusionChoice::Ferrari {
+            crate::case::schema::DiffusionName::Ferrari => DiffusionChoice::Ferrari {
                 coefficient: case.fluid.ferrari_coefficient,
             },
         },
-        density_power: if case.boundary == crate::case::BoundaryName::Usaw {
+        density_power: if case.boundary == crate::case::schema::BoundaryName::Usaw {
             case.usaw.density_power
         } else {
             0
         },
         particle_spacing: case.resolution.dx,
-        summation_density: case.usaw.continuity == crate::case::ContinuityName::Summation,
+        summation_density: case.usaw.continuity == crate::case::schema::ContinuityName::Summation,
         reorder_interval: 1,
         neighbour_skin: case.time.neighbour_skin,
         elastic_bounce: case.elastic_bounce,
@@ -585,8 +394,8 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                 slice_point: f.slice_point.as_deref().map_or(centre, V::from_slice),
                 slice_width: f.slice_width.unwrap_or(2.0 * dx),
                 rule: match f.rule {
-                    crate::case::FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
-                    crate::case::FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
+                    crate::case::schema::FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
+                    crate::case::schema::FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
                 },
             }
         }),
@@ -594,8 +403,8 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         // set below, once the initial energies are known
     };
     let integrator = match case.time.integrator {
-        crate::case::IntegratorName::Verlet => Integrator::Verlet,
-        crate::case::IntegratorName::Midpoint => {
+        crate::case::schema::IntegratorName::Verlet => Integrator::Verlet,
+        crate::case::schema::IntegratorName::Midpoint => {
             let m = &case.midpoint;
             let (kinetic, compressible, _) = fluid_energies(&fluid, &eos, gravity);
             let potential = energy_scale(&fluid, &eos, gravity) - kinetic - compressible.abs();
@@ -622,154 +431,15 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     let mut walls = Walls::new(elements, bodies, kernel.support);
     walls.stretch = stretch;
     let mut sim = Simulation::new(config, fluid, walls, probes);
-    if case.boundary == crate::case::BoundaryName::Usaw
+    if case.boundary == crate::case::schema::BoundaryName::Usaw
         && case
             .fluid_block
             .iter()
-            .all(|b| b.mass == crate::case::MassRule::Initial)
+            .all(|b| b.mass == crate::case::schema::MassRule::Initial)
     {
         sim.vertex_masses_from_density();
     }
     Ok(sim)
-}
-
-/// Sets up the free bodies of a case: mass, centre of mass and inertia (given, or from the
-/// body's closed mesh walls), initial attitude, velocities, locks and coupling.
-fn free_bodies<V: CaseDim>(
-    loaded: &LoadedCase,
-    bodies: &mut [Body<V>],
-    surfaces: &[(usize, bisph_core::surface::Surface)],
-    gravity: V,
-    elements: &BoundaryElements<V>,
-) -> Result<(), CaseError> {
-    use glam::{DMat3, DQuat};
-    for (k, b) in loaded.case.body.iter().enumerate() {
-        let Some(spec) = &b.free else { continue };
-        let key = format!("body[{k}].free");
-        if !elements.body.iter().any(|&j| j as usize == k + 1) {
-            return Err(loaded.error(&key, "no [[wall]] belongs to this free body"));
-        }
-        // Solid from the body's mesh walls (uniform density).
-        let mine: Vec<&bisph_core::surface::Surface> = surfaces
-            .iter()
-            .filter(|(i, _)| *i == k + 1)
-            .map(|(_, s)| s)
-            .collect();
-        let solid = if mine.is_empty() {
-            None
-        } else {
-            let (mut m, mut first, mut inertia) = (0.0, DVec3::ZERO, DMat3::ZERO);
-            // Inertia about the origin, summed, then moved to the common centre of mass.
-            let outer = |v: DVec3| DMat3::from_cols(v * v.x, v * v.y, v * v.z);
-            let about_origin = |mass: f64, c: DVec3, i: DMat3| {
-                let shift = DMat3::IDENTITY * c.length_squared() - outer(c);
-                i + shift * mass
-            };
-            for s in &mine {
-                let (mi, ci, ii) = s.mass_properties(1.0);
-                m += mi;
-                first += ci * mi;
-                inertia += about_origin(mi, ci, ii);
-            }
-            let c = first / m;
-            let about_c = inertia - (DMat3::IDENTITY * c.length_squared() - outer(c)) * m;
-            Some((m, c, about_c))
-        };
-        let (mass, density) = match (spec.mass, spec.density, &solid) {
-            (Some(m), _, Some((volume, _, _))) => (m, m / volume),
-            (Some(m), _, None) => (m, 0.0),
-            (None, Some(rho), Some((volume, _, _))) => (rho * volume, rho),
-            (None, Some(_), None) => return Err(loaded.error(
-                &format!("{key}.density"),
-                "a density needs closed mesh walls (shape = \"mesh\" or \"capsule\") on this body",
-            )),
-            (None, None, _) => {
-                return Err(loaded.error(&format!("{key}.mass"), "missing: a mass or a density"))
-            }
-        };
-        let mut angles = [0.0; 3];
-        match &spec.rotate {
-            Some(crate::case::Angles::One(a)) => angles[2] = a.to_radians(),
-            Some(crate::case::Angles::Many(v)) => {
-                if V::DIM == 2 {
-                    angles[2] = v.first().copied().unwrap_or(0.0).to_radians();
-                } else {
-                    for (i, a) in v.iter().take(3).enumerate() {
-                        angles[i] = a.to_radians();
-                    }
-                }
-            }
-            None => {}
-        }
-        let attitude = DQuat::from_rotation_z(angles[2])
-            * DQuat::from_rotation_y(angles[1])
-            * DQuat::from_rotation_x(angles[0]);
-        let inertia = match &spec.inertia {
-            Some(i) if V::DIM == 2 => DMat3::from_diagonal(DVec3::new(1.0, 1.0, i[0])),
-            Some(i) if i.len() == 3 => DMat3::from_diagonal(DVec3::new(i[0], i[1], i[2])),
-            Some(i) => {
-                DMat3::from_cols_array(&[i[0], i[3], i[6], i[1], i[4], i[7], i[2], i[5], i[8]])
-            }
-            None => match &solid {
-                // World-axes tensor of the solid at time zero, in body axes.
-                Some((_, _, i)) => {
-                    let r = DMat3::from_quat(attitude);
-                    r.transpose() * (*i * density) * r
-                }
-                None => {
-                    return Err(loaded.error(
-                        &format!("{key}.inertia"),
-                        "missing: give the inertia, or closed mesh walls to compute it from",
-                    ))
-                }
-            },
-        };
-        if inertia.determinant().abs() < f64::MIN_POSITIVE || !inertia.is_finite() {
-            return Err(loaded.error(&format!("{key}.inertia"), "a singular inertia tensor"));
-        }
-        let centre = match (&b.centre, &solid) {
-            (Some(c), _) => V::from_slice(c),
-            (None, Some((_, c, _))) => V::from_slice(&c.to_array()),
-            (None, None) => {
-                return Err(loaded.error(
-                    &format!("body[{k}].centre"),
-                    "missing: the centre of mass (no closed mesh wall to compute it from)",
-                ))
-            }
-        };
-        let g = DVec3::from_array(gravity.to_xyz());
-        let mut free = FreeBody::new(mass, inertia, attitude, g);
-        if let Some(v) = &spec.velocity {
-            free.velocity = DVec3::from_array(V::from_slice(v).to_xyz());
-        }
-        if let Some(w) = &spec.angular_velocity {
-            free.angular_velocity = if V::DIM == 2 {
-                DVec3::new(0.0, 0.0, w[0])
-            } else {
-                DVec3::from_slice(w)
-            };
-        }
-        let axis = |a: &str| match a {
-            "x" => 0,
-            "y" => 1,
-            _ => 2,
-        };
-        for a in &spec.lock_translation {
-            free.locked_translation[axis(a)] = true;
-        }
-        for a in &spec.lock_rotation {
-            free.locked_rotation[axis(a)] = true;
-        }
-        if V::DIM == 2 {
-            free = free.planar();
-        }
-        if spec.coupling.as_deref() == Some("staggered") {
-            free.coupling = Coupling::Staggered;
-        }
-        bodies[k + 1].centre = centre;
-        bodies[k + 1].motion = Motion::Free(free);
-    }
-    Ok(())
 }
 
 fn eos_background(eos: &Eos) -> f64 {

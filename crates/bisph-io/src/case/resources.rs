@@ -1,7 +1,7 @@
 //! Resource limits: a case that would need more memory than the machine has is refused before
 //! anything is allocated.
 
-use crate::case::LoadedCase;
+use crate::case::schema::LoadedCase;
 
 /// Bytes per fluid particle of a running simulation: the fluid arrays (id, position, velocity,
 /// density, mass, pressure, acceleration, density rate), the integrator's scratch (staged

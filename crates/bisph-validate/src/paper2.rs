@@ -3,14 +3,14 @@
 //! and the still-water tank with Shepard-renormalised boundary integrals, discrete vs
 //! geometric gamma.
 
-use crate::build::build_simulation;
-use crate::case::parse_case;
-use crate::plot::line_plot_png as plot;
-use crate::validate::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::geometry::{box_elements_2d, polyline_elements, ElementShape};
 use bisph_core::neighbours::CellGrid;
 use bisph_core::walls::{geometric_shepard, integrated_shepard};
 use bisph_core::{BoundaryElements, Simulation, Wendland};
+use bisph_io::case::build_simulation;
+use bisph_io::case::parse_case;
+use bisph_io::formats::plot::line_plot_png as plot;
 use glam::DVec2;
 use std::f64::consts::PI;
 use std::path::Path;

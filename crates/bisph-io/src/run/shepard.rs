@@ -12,8 +12,10 @@
 //! Points come from a CSV file with `dim` numbers per line (`x,y` or `x,y,z`); an optional
 //! header line (`x,y[,z]`), blank lines and lines starting with `#` are skipped.
 
-use crate::build::{build_simulation, CaseDim};
-use crate::case::LoadedCase;
+use crate::case::build::build_simulation;
+
+use crate::case::dim::CaseDim;
+use crate::case::schema::LoadedCase;
 use bisph_core::neighbours::CellGrid;
 use bisph_core::walls::{geometric_shepard, integrated_shepard};
 use bisph_core::Simulation;

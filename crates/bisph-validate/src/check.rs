@@ -1,10 +1,6 @@
-//! `bisph validate`: validation cases, each comparing measured quantities with a reference
-//! and a tolerance, and a report (table on stdout, `report.md` with plots).
-//!
-//! A validation case implements [`ValidationCase`]; [`registry`] lists them all. Cases run at
-//! a quick resolution in CI (`--quick`) and at full resolution otherwise.
+//! A validation case and what it reports: checks of measured quantities against a reference
+//! with a tolerance.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// How a value is compared with its reference.
@@ -92,7 +88,8 @@ impl Check {
         }
     }
 
-    fn tolerance_text(&self) -> String {
+    /// The tolerance as printed in the table and the report.
+    pub fn tolerance_text(&self) -> String {
         match self.tolerance {
             Tolerance::Absolute(t) => format!("± {t:.3e}"),
             Tolerance::Relative(t) => format!("± {:.3}%", 100.0 * t),
@@ -130,83 +127,4 @@ pub trait ValidationCase: Sync {
     fn in_quick_suite(&self) -> bool {
         true
     }
-}
-
-/// Every validation case bisph knows.
-pub fn registry() -> Vec<Box<dyn ValidationCase>> {
-    let mut cases = Vec::new();
-    cases.extend(crate::paper1_cases::cases());
-    cases.extend(crate::paper2_cases::cases());
-    cases.extend(crate::paper3_cases::cases());
-    cases.extend(crate::paper3_flow_cases::cases());
-    cases.extend(crate::pack_cases::cases());
-    cases.extend(crate::rigid_cases::cases());
-    cases.extend(crate::still_water::cases());
-    cases
-}
-
-/// The table printed on stdout.
-pub fn table(reports: &[CaseReport]) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<22} {:<44} {:>13} {:>13} {:>12} {:>5}",
-        "case", "quantity", "value", "reference", "tolerance", "pass"
-    );
-    for r in reports {
-        for c in &r.checks {
-            let _ = writeln!(
-                s,
-                "{:<22} {:<44} {:>13.5e} {:>13.5e} {:>12} {:>5}",
-                r.name,
-                c.quantity,
-                c.value,
-                c.reference,
-                c.tolerance_text(),
-                c.verdict()
-            );
-        }
-    }
-    s
-}
-
-/// `report.md`: the table, the notes and the plots of every case.
-pub fn markdown(reports: &[CaseReport], quick: bool) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# bisph validation report ({})\n",
-        if quick { "quick" } else { "full" }
-    );
-    for r in reports {
-        let _ = writeln!(s, "## {} ({:.1} s)\n", r.name, r.wall_seconds);
-        let _ = writeln!(
-            s,
-            "| quantity | value | reference | tolerance | pass | source |"
-        );
-        let _ = writeln!(s, "| --- | ---: | ---: | --- | --- | --- |");
-        for c in &r.checks {
-            let _ = writeln!(
-                s,
-                "| {} | {:.5e} | {:.5e} | {} | {} | {} |",
-                c.quantity,
-                c.value,
-                c.reference,
-                c.tolerance_text(),
-                c.verdict(),
-                match &c.known_failure_reason {
-                    Some(why) => format!("{} (known failure: {why})", c.source),
-                    None => c.source.clone(),
-                }
-            );
-        }
-        for n in &r.notes {
-            let _ = writeln!(s, "\n{n}");
-        }
-        for p in &r.plots {
-            let _ = writeln!(s, "\n![{}]({})", p.display(), p.display());
-        }
-        let _ = writeln!(s);
-    }
-    s
 }

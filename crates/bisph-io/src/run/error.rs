@@ -1,0 +1,81 @@
+//! What can stop a run, with its exit status.
+
+use crate::case::error::CaseError;
+use crate::formats::files::OutputError;
+use crate::run::checkpoint::CheckpointError;
+use crate::run::diagnostics::Diagnosis;
+use std::path::PathBuf;
+
+/// Why a run failed.
+#[derive(Debug)]
+pub enum RunError {
+    /// The case is wrong.
+    Case(CaseError),
+    /// An output could not be written (the last checkpoint on disk is kept).
+    Output(OutputError),
+    /// A checkpoint was refused.
+    Checkpoint(CheckpointError),
+    /// The case needs more memory than the machine has.
+    Resources(String),
+    /// The run was interrupted by a signal; a checkpoint was written.
+    Interrupted {
+        /// Step reached.
+        step: u64,
+        /// Time reached.
+        time: f64,
+        /// The checkpoint to resume from.
+        checkpoint: PathBuf,
+    },
+    /// A divergence watch tripped (outputs up to the last good state are kept;
+    /// `diagnostics.json` says what happened).
+    Stopped(Box<Diagnosis>),
+}
+
+impl RunError {
+    /// Exit code of `bisph run` for this error (see the table in `docs/outputs-and-errors.md`).
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunError::Case(_) => 1,
+            RunError::Output(_) => 4,
+            RunError::Checkpoint(_) => 5,
+            RunError::Resources(_) => 6,
+            RunError::Interrupted { .. } => 10,
+            RunError::Stopped(d) => d.exit_code,
+        }
+    }
+}
+
+impl std::fmt::Display for RunError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RunError::Case(e) => write!(f, "{e}"),
+            RunError::Output(e) => write!(f, "{e}"),
+            RunError::Checkpoint(e) => write!(f, "{e}"),
+            RunError::Resources(e) => write!(f, "{e}"),
+            RunError::Interrupted {
+                step,
+                time,
+                checkpoint,
+            } => write!(
+                f,
+                "interrupted at step {step} (t = {time:.6e} s); checkpoint written to {}",
+                checkpoint.display()
+            ),
+            RunError::Stopped(d) => write!(f, "simulation stopped: {d}"),
+        }
+    }
+}
+
+impl std::error::Error for RunError {}
+
+impl From<OutputError> for RunError {
+    fn from(e: OutputError) -> Self {
+        RunError::Output(e)
+    }
+}
+
+impl From<CheckpointError> for RunError {
+    fn from(e: CheckpointError) -> Self {
+        RunError::Checkpoint(e)
+    }
+}

@@ -1,0 +1,14 @@
+//! Running a case: the time loop of `bisph run` with its outputs, checkpoints, diagnostics
+//! and settling, and the drivers of `bisph pack` and `bisph shepard`.
+
+pub mod checkpoint;
+pub mod diagnostics;
+pub mod error;
+pub mod outputs;
+pub mod pack;
+pub mod runner;
+pub mod settle;
+pub mod shepard;
+
+pub use error::RunError;
+pub use runner::{resume_case, run_case, run_case_with, Progress, RunOptions, Summary};
