@@ -245,6 +245,187 @@ const BODIES: usize = 3;
 const MIDPOINT: usize = 4;
 const FLUX: usize = 5;
 
+/// The headers of a run's CSV series, in the order of [`checkpoint::SERIES_FILES`]; `None`
+/// for a series the case does not write (pistons, midpoint iterations, flux forcing).
+fn series_headers<V: CaseDim>(
+    sim: &Simulation<V>,
+    probe_header: &[String],
+) -> [Option<Vec<String>>; checkpoint::SERIES] {
+    let mut force_header = vec![
+        "t".to_string(),
+        "body".to_string(),
+        "fx".into(),
+        "fy".into(),
+    ];
+    if V::DIM == 3 {
+        force_header.extend(["fz", "mx", "my", "mz"].map(String::from));
+    }
+    let has_pistons = sim
+        .walls
+        .bodies
+        .iter()
+        .any(|b| matches!(b.motion, Motion::Piston(_)));
+    let midpoint = matches!(
+        sim.config.integrator,
+        bisph_core::simulation::Integrator::Midpoint(_)
+    );
+    [
+        Some(
+            [
+                "t",
+                "kinetic",
+                "compressible",
+                "potential",
+                "wall_work",
+                "total",
+                "viscous_dissipation",
+                "forcing_work",
+            ]
+            .map(String::from)
+            .to_vec(),
+        ),
+        Some(force_header),
+        Some(probe_header.to_vec()),
+        has_pistons.then(|| {
+            [
+                "t",
+                "body",
+                "position",
+                "velocity",
+                "kinetic",
+                "outside_work",
+            ]
+            .map(String::from)
+            .to_vec()
+        }),
+        midpoint.then(|| ["t", "iterations", "residue"].map(String::from).to_vec()),
+        sim.config.flux.map(|_| {
+            [
+                "t",
+                "bulk_velocity",
+                "target_velocity",
+                "force",
+                "relative_error",
+            ]
+            .map(String::from)
+            .to_vec()
+        }),
+    ]
+}
+
+/// Where a run starts: its open CSV series, VTK frames, counters and histories, either fresh
+/// (files created with their headers, stale checkpoints removed) or from a checkpoint (the
+/// state restored, every series cut back to its saved length).
+struct RunStart {
+    outputs: Outputs,
+    free_csv: Vec<Series>,
+    fluid_body_max: f64,
+    frames: Frames,
+    counters: RunCounters,
+    history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>,
+    probe_history: Vec<Vec<f64>>,
+    resumed_from_step: Option<u64>,
+}
+
+/// Opens the outputs of a run, fresh or resumed from `resumed` (see [`RunStart`]).
+fn start_run<V: CaseDim>(
+    loaded: &LoadedCase,
+    out: &Path,
+    sim: &mut Simulation<V>,
+    resumed: Option<Checkpoint<V>>,
+    checkpoint_path: &Path,
+    headers: &[Option<Vec<String>>; checkpoint::SERIES],
+    free_csv_paths: &[PathBuf],
+) -> Result<RunStart, RunError> {
+    let mut outputs = Outputs {
+        series: Default::default(),
+    };
+    let mut free_csv = Vec::new();
+    match resumed {
+        Some(c) => {
+            c.sim
+                .restore(sim)
+                .and_then(|_| {
+                    c.run.check(
+                        sim.time,
+                        loaded.case.output.series_interval,
+                        loaded.case.output.vtk_interval,
+                    )
+                })
+                .map_err(|reason| CheckpointError::Mismatch {
+                    path: checkpoint_path.to_path_buf(),
+                    reason,
+                })?;
+            if c.run.body_csv_lengths.len() != free_csv_paths.len() {
+                return Err(RunError::Checkpoint(CheckpointError::Mismatch {
+                    path: checkpoint_path.to_path_buf(),
+                    reason: format!(
+                        "{} free-body series saved, the case has {} free bodies",
+                        c.run.body_csv_lengths.len(),
+                        free_csv_paths.len()
+                    ),
+                }));
+            }
+            for (k, header) in headers.iter().enumerate() {
+                if header.is_some() {
+                    let path = out.join(checkpoint::SERIES_FILES[k]);
+                    outputs.series[k] = Some(Series::reopen(path, c.run.csv_lengths[k])?);
+                }
+            }
+            for (path, &len) in free_csv_paths.iter().zip(&c.run.body_csv_lengths) {
+                free_csv.push(Series::reopen(path.clone(), len)?);
+            }
+            Ok(RunStart {
+                outputs,
+                free_csv,
+                fluid_body_max: c.run.fluid_body_max,
+                frames: Frames::resume(out, &c.run.frame_times)?,
+                counters: c.run,
+                history: c.history,
+                probe_history: c.probe_history,
+                resumed_from_step: Some(sim.step),
+            })
+        }
+        None => {
+            write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
+            for (k, header) in headers.iter().enumerate() {
+                if let Some(h) = header {
+                    let path = out.join(checkpoint::SERIES_FILES[k]);
+                    outputs.series[k] = Some(Series::create(path, h)?);
+                }
+            }
+            for path in free_csv_paths {
+                free_csv.push(Series::create(
+                    path.clone(),
+                    &crate::run::outputs::FREE_BODY_COLUMNS.map(String::from),
+                )?);
+            }
+            // A stale checkpoint or report from an earlier run in this folder must not be
+            // mistaken for this run's.
+            for stale in [checkpoint::FILE_NAME, "diagnostics.json"] {
+                let p = out.join(stale);
+                if p.exists() {
+                    at(&p, std::fs::remove_file(&p))?;
+                }
+            }
+            Ok(RunStart {
+                outputs,
+                free_csv,
+                fluid_body_max: 0.0,
+                frames: Frames::new(out)?,
+                counters: RunCounters {
+                    scale: energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity),
+                    e0_total: sim.energy().total,
+                    ..RunCounters::default()
+                },
+                history: Vec::new(),
+                probe_history: Vec::new(),
+                resumed_from_step: None,
+            })
+        }
+    }
+}
+
 /// Builds and runs a case, writing `energy.csv`, `forces.csv`, `probes.csv`, VTK frames,
 /// `summary.json`, plots and a copy of the case into `out`; checkpoints into
 /// `out/checkpoint.bin`; on a tripped watch, `diagnostics.json`.
@@ -266,70 +447,14 @@ pub fn run<V: CaseDim>(
     };
     let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some())?;
 
-    let mut force_header = vec![
-        "t".to_string(),
-        "body".to_string(),
-        "fx".into(),
-        "fy".into(),
-    ];
-    if V::DIM == 3 {
-        force_header.extend(["fz", "mx", "my", "mz"].map(String::from));
-    }
     let mut probe_header = vec!["t".to_string()];
     probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
-    let has_pistons = sim
-        .walls
-        .bodies
-        .iter()
-        .any(|b| matches!(b.motion, Motion::Piston(_)));
     let midpoint = match sim.config.integrator {
         bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
         bisph_core::simulation::Integrator::Verlet => None,
     };
-    let headers: [Option<Vec<String>>; checkpoint::SERIES] = [
-        Some(
-            [
-                "t",
-                "kinetic",
-                "compressible",
-                "potential",
-                "wall_work",
-                "total",
-                "viscous_dissipation",
-                "forcing_work",
-            ]
-            .map(String::from)
-            .to_vec(),
-        ),
-        Some(force_header),
-        Some(probe_header.clone()),
-        has_pistons.then(|| {
-            [
-                "t",
-                "body",
-                "position",
-                "velocity",
-                "kinetic",
-                "outside_work",
-            ]
-            .map(String::from)
-            .to_vec()
-        }),
-        midpoint.map(|_| ["t", "iterations", "residue"].map(String::from).to_vec()),
-        sim.config.flux.map(|_| {
-            [
-                "t",
-                "bulk_velocity",
-                "target_velocity",
-                "force",
-                "relative_error",
-            ]
-            .map(String::from)
-            .to_vec()
-        }),
-    ];
+    let headers = series_headers(&sim, &probe_header);
     // Free bodies: one CSV each, and the fluid + bodies energy watched for the summary.
-    let mut free_csv = Vec::new();
     let has_free = sim
         .walls
         .bodies
@@ -348,90 +473,26 @@ pub fn run<V: CaseDim>(
         e.kinetic + e.compressible + e.potential + k + p
     };
     let fluid_body0 = body_energy(&sim);
-    let mut fluid_body_max: f64 = 0.0;
 
-    let mut counters;
-    let mut history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>;
-    let mut probe_history: Vec<Vec<f64>>;
-    let mut outputs = Outputs {
-        series: Default::default(),
-    };
-    let mut frames;
-    let resumed_from_step;
-    match resumed {
-        Some(c) => {
-            c.sim
-                .restore(&mut sim)
-                .and_then(|_| {
-                    c.run.check(
-                        sim.time,
-                        case.output.series_interval,
-                        case.output.vtk_interval,
-                    )
-                })
-                .map_err(|reason| CheckpointError::Mismatch {
-                    path: checkpoint_path.clone(),
-                    reason,
-                })?;
-            if c.run.body_csv_lengths.len() != free_csv_paths.len() {
-                return Err(RunError::Checkpoint(CheckpointError::Mismatch {
-                    path: checkpoint_path.clone(),
-                    reason: format!(
-                        "{} free-body series saved, the case has {} free bodies",
-                        c.run.body_csv_lengths.len(),
-                        free_csv_paths.len()
-                    ),
-                }));
-            }
-            for (k, header) in headers.iter().enumerate() {
-                if header.is_some() {
-                    let path = out.join(checkpoint::SERIES_FILES[k]);
-                    outputs.series[k] = Some(Series::reopen(path, c.run.csv_lengths[k])?);
-                }
-            }
-            for (path, &len) in free_csv_paths.iter().zip(&c.run.body_csv_lengths) {
-                free_csv.push(Series::reopen(path.clone(), len)?);
-            }
-            fluid_body_max = c.run.fluid_body_max;
-            frames = Frames::resume(out, &c.run.frame_times)?;
-            counters = c.run;
-            history = c.history;
-            probe_history = c.probe_history;
-            resumed_from_step = Some(sim.step);
-        }
-        None => {
-            write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
-            for (k, header) in headers.iter().enumerate() {
-                if let Some(h) = header {
-                    let path = out.join(checkpoint::SERIES_FILES[k]);
-                    outputs.series[k] = Some(Series::create(path, h)?);
-                }
-            }
-            for path in &free_csv_paths {
-                free_csv.push(Series::create(
-                    path.clone(),
-                    &crate::run::outputs::FREE_BODY_COLUMNS.map(String::from),
-                )?);
-            }
-            // A stale checkpoint or report from an earlier run in this folder must not be
-            // mistaken for this run's.
-            for stale in [checkpoint::FILE_NAME, "diagnostics.json"] {
-                let p = out.join(stale);
-                if p.exists() {
-                    at(&p, std::fs::remove_file(&p))?;
-                }
-            }
-            frames = Frames::new(out)?;
-            counters = RunCounters {
-                scale: energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity),
-                e0_total: sim.energy().total,
-                ..RunCounters::default()
-            };
-            history = Vec::new();
-            probe_history = Vec::new();
-            resumed_from_step = None;
-        }
-    }
+    let RunStart {
+        mut outputs,
+        mut free_csv,
+        mut fluid_body_max,
+        mut frames,
+        mut counters,
+        mut history,
+        mut probe_history,
+        resumed_from_step,
+        ..
+    } = start_run(
+        loaded,
+        out,
+        &mut sim,
+        resumed,
+        &checkpoint_path,
+        &headers,
+        &free_csv_paths,
+    )?;
     let case_source = std::fs::canonicalize(&loaded.source)
         .map(|p| p.display().to_string())
         .unwrap_or_else(|_| loaded.source.clone());
