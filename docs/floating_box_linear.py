@@ -2,7 +2,7 @@
 """Linear heave period of the `floating-box-2d` box in its closed tank (numpy only).
 
 Reference for `bisph validate floating-box-2d` (FLOAT_LINEAR_PERIOD in
-crates/bisph-io/src/rigid_cases.rs). Linear potential flow, Lagrangian form:
+crates/bisph-validate/src/rigid.rs). Linear potential flow, Lagrangian form:
 generalised coordinates are the free-surface elevations eta_k of the surface cells
 (the box heave Z follows from the water's volume, sum eta_k delta + B Z = 0);
 - kinetic energy: rho/2 int |grad phi|^2 from the Neumann problem for phi with the
