@@ -28,39 +28,13 @@
 //! change, the wall work and the bodies' kinetic + gravity energy balance exactly, up to the
 //! midpoint rule of the compression energy.
 
+use super::settings::MidpointParams;
 use super::Simulation;
 use crate::dim::Vector;
 use crate::energy::deterministic_sum;
 use crate::error::SimError;
 use crate::walls::bounce::elastic_bounce;
 use rayon::prelude::*;
-
-/// Settings of the midpoint iterations.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MidpointParams {
-    /// Most fixed-point iterations per step.
-    pub max_iterations: u32,
-    /// Absolute residue (a power) below which the iterations stop.
-    pub tolerance: f64,
-    /// Geometric rate the residue must fall at; slower growth of `f` is triggered above it.
-    pub min_decrease: f64,
-    /// Relaxation increment `inc`.
-    pub relax_increment: f64,
-    /// Relaxation at the start of a step `f0` (0: none).
-    pub initial_relaxation: f64,
-}
-
-impl Default for MidpointParams {
-    fn default() -> Self {
-        MidpointParams {
-            max_iterations: 10,
-            tolerance: 0.0,
-            min_decrease: 0.2,
-            relax_increment: 0.25,
-            initial_relaxation: 0.0,
-        }
-    }
-}
 
 impl<V: Vector> Simulation<V> {
     /// One semi-implicit midpoint step of size `dt`.

@@ -3,11 +3,11 @@
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
 mod midpoint;
+mod settings;
 mod settle;
 mod verlet;
 
-pub use midpoint::MidpointParams;
-pub use settle::{SettleOutcome, SettleParams, SettleReport};
+pub use settings::{MidpointParams, SettleOutcome, SettleParams, SettleReport};
 
 use crate::dim::Vector;
 use crate::energy::{fluid_energies, EnergyBudget};

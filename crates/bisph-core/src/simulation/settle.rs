@@ -14,63 +14,13 @@
 //! does not come to rest: it flows. Settling detects that by the kinetic energy the fluid
 //! gains and then restores the original start untouched.
 
+use super::settings::{SettleOutcome, SettleParams, SettleReport};
 use super::Simulation;
 use crate::dim::Vector;
 use crate::error::SimError;
 use crate::particles::Fluid;
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// How settling runs and when it stops.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SettleParams {
-    /// Damping rate `beta` [1/s] of `u <- u exp(-beta dt)`.
-    pub damping: f64,
-    /// Speed scale `U` [m/s] of the tolerances (e.g. `sqrt(g H)`).
-    pub speed_scale: f64,
-    /// At rest when every speed is below `speed_tolerance U` ...
-    pub speed_tolerance: f64,
-    /// ... and every acceleration below `acceleration_tolerance U beta`.
-    pub acceleration_tolerance: f64,
-    /// Most settling time [s] (of the case's own time scale) before giving up.
-    pub max_time: f64,
-    /// The fluid flows (is not in a resting configuration) once its kinetic energy exceeds
-    /// this [J (per unit depth in 2-D)]: a dam-break column reaches a sizeable part of its
-    /// potential energy within a fraction of `sqrt(H/g)`, while the imbalance of a resting
-    /// start stays many orders of magnitude below it.
-    pub max_kinetic: f64,
-}
-
-/// How settling ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SettleOutcome {
-    /// At rest to the tolerances: the run starts from the settled state.
-    Settled,
-    /// Not at rest within `max_time`: the run starts from the state reached, at zero velocity.
-    TimedOut,
-    /// The fluid gained more kinetic energy than a resting start can release (it flows, as a
-    /// dam-break column does, or the scheme is unstable): the original start is kept.
-    NotAtRest,
-}
-
-/// What settling did.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SettleReport {
-    /// How it ended.
-    pub outcome: SettleOutcome,
-    /// Steps taken.
-    pub steps: u64,
-    /// Settling time [s].
-    pub time: f64,
-    /// Largest speed at the end [m/s] (before the velocities are zeroed).
-    pub max_speed: f64,
-    /// Largest acceleration at the end [m/s^2].
-    pub max_acceleration: f64,
-    /// Farthest a particle travelled from its start [m].
-    pub max_displacement: f64,
-    /// Wall-clock seconds.
-    pub wall_seconds: f64,
-}
 
 impl<V: Vector> Simulation<V> {
     /// Settles the fluid (see the module documentation) with the walls held at their
