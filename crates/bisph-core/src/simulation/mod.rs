@@ -978,13 +978,7 @@ impl<V: Vector> Simulation<V> {
             return dt;
         }
         let h = self.config.kernel.h;
-        let a_max = self
-            .fluid
-            .acceleration
-            .par_iter()
-            .map(|a| a.length_squared())
-            .reduce(|| 0.0, f64::max)
-            .sqrt();
+        let a_max = self.max_acceleration();
         let mut dt = h / self.config.eos.c0();
         if a_max > 0.0 {
             dt = dt.min((h / a_max).sqrt());
@@ -1130,6 +1124,16 @@ impl<V: Vector> Simulation<V> {
                 n
             })
             .sum()
+    }
+
+    /// Largest particle acceleration of the last rate evaluation.
+    pub fn max_acceleration(&self) -> f64 {
+        self.fluid
+            .acceleration
+            .par_iter()
+            .map(|a| a.length_squared())
+            .reduce(|| 0.0, f64::max)
+            .sqrt()
     }
 
     /// Largest particle speed.

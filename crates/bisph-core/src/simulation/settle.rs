@@ -50,7 +50,7 @@ impl<V: Vector> Simulation<V> {
                 .par_iter_mut()
                 .for_each(|u| *u = *u * damp);
             report.max_speed = self.max_speed();
-            report.max_acceleration = max_length(&self.fluid.acceleration);
+            report.max_acceleration = self.max_acceleration();
             report.max_displacement = max_displacement(&self.fluid, &start);
             if self.energy().kinetic > params.max_kinetic {
                 report.outcome = SettleOutcome::NotAtRest;
@@ -75,7 +75,6 @@ impl<V: Vector> Simulation<V> {
         self.time = 0.0;
         self.step = 0;
         self.last_dt = 0.0;
-        self.earlier_dt = 0.0;
         self.wall_work = 0.0;
         self.viscous_dissipation = 0.0;
         self.forcing_work = 0.0;
@@ -87,11 +86,7 @@ impl<V: Vector> Simulation<V> {
         if self.config.wall_model.needs_gamma() {
             self.geometric_gamma();
         }
-        self.scratch.velocity = self.fluid.velocity.clone();
-        self.scratch.density = self.fluid.density.clone();
-        self.evaluate_rates();
-        self.store_body_accelerations(true);
-        self.refresh_pressure();
+        self.refresh_rates();
     }
 }
 
@@ -111,14 +106,6 @@ fn max_displacement<V: Vector>(fluid: &Fluid<V>, start: &[V]) -> f64 {
         .par_iter()
         .zip(fluid.id.par_iter())
         .map(|(&r, &id)| (r - start[id as usize]).length_squared())
-        .reduce(|| 0.0, f64::max)
-        .sqrt()
-}
-
-fn max_length<V: Vector>(values: &[V]) -> f64 {
-    values
-        .par_iter()
-        .map(|a| a.length_squared())
         .reduce(|| 0.0, f64::max)
         .sqrt()
 }
