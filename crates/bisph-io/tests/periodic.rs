@@ -73,6 +73,7 @@ dim = 2
 [fluid]
 density = 1000.0
 sound_speed = 10.0
+artificial_viscosity = 0.0
 [resolution]
 dx = 0.05
 [time]
@@ -121,6 +122,7 @@ dim = 3
 [fluid]
 density = 1000.0
 sound_speed = 10.0
+artificial_viscosity = 0.0
 [resolution]
 dx = 0.1
 [time]

@@ -209,6 +209,7 @@ density_power = 0
 density = 1.0
 sound_speed = 10.0
 eos = "tait"
+artificial_viscosity = 0.0
 [resolution]
 dx = 0.04
 h_over_dx = 2.0
@@ -222,6 +223,8 @@ shape = "box"
 min = [0.02, 0.02]
 max = [0.98, 0.98]
 pressure = 0.0
+fill = "lattice"
+mass = "reference"
 [[wall]]
 shape = "box"
 min = [0.0, 0.0]

@@ -20,7 +20,7 @@ use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wen
 /// The equation of state of a case.
 pub fn eos_of(case: &Case) -> Eos {
     let f = &case.fluid;
-    match f.eos {
+    match case.eos_name() {
         crate::case::schema::EosName::Linear => Eos::Linear {
             rho0: f.density,
             c0: f.sound_speed,
@@ -223,7 +223,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             }
         });
         let mut points = points;
-        if block.fill.as_deref() == Some("usaw") {
+        if case.fills_for_usaw(block) {
             relax_for_usaw(
                 &kernel,
                 block_dx,
@@ -267,7 +267,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
                     format!("no density gives the pressure {p} Pa with this equation of state"),
                 ));
             };
-            let mass = match block.mass {
+            let mass = match case.mass_rule(block) {
                 crate::case::schema::MassRule::Reference => mass,
                 crate::case::schema::MassRule::Initial => rho * dx.powi(V::DIM as i32),
             };
@@ -435,7 +435,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         && case
             .fluid_block
             .iter()
-            .all(|b| b.mass == crate::case::schema::MassRule::Initial)
+            .all(|b| case.mass_rule(b) == crate::case::schema::MassRule::Initial)
     {
         sim.vertex_masses_from_density();
     }

@@ -6,11 +6,10 @@ use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// Equation of state name.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum EosName {
     /// `p = p0 + c0^2 (rho - rho0)` (paper 1, eq 3).
-    #[default]
     Linear,
     /// Tait (paper 3, eq 15).
     Tait,
@@ -60,11 +59,11 @@ pub enum DiffusionName {
 #[serde(rename_all = "lowercase")]
 pub enum WallInterpolationName {
     /// Paper 3, eqs 16-17.
-    #[default]
     Shepard,
     /// Neumann with gravity (`dp/dn = rho g . n`), the constraint of eq 82.
     Neumann,
-    /// Hydrostatic-corrected, eq 83.
+    /// Hydrostatic-corrected, eq 83 (the default: without gravity it is eqs 16-17 exactly).
+    #[default]
     Hydrostatic,
 }
 
@@ -132,9 +131,9 @@ pub struct FluidSection {
     pub density: f64,
     /// Speed of sound `c0` [m/s].
     pub sound_speed: f64,
-    /// Equation of state.
-    #[serde(default)]
-    pub eos: EosName,
+    /// Equation of state (default: Tait with `boundary = "usaw"`, whose model paper 3 closes
+    /// with it (eq 15), else linear).
+    pub eos: Option<EosName>,
     /// Background pressure `p0` [Pa].
     #[serde(default)]
     pub background_pressure: f64,
@@ -156,7 +155,8 @@ pub struct FluidSection {
     pub viscosity: f64,
     /// Artificial viscosity `alpha` (Monaghan), applied through the same Laplacian as the
     /// laminar viscosity with the equivalent `nu = alpha h c0 / (2 (d + 2))`, its dissipation
-    /// booked in `energy.csv` (default [`DEFAULT_BI_ALPHA`] with `boundary = "bi"`, else 0).
+    /// booked in `energy.csv` (default [`DEFAULT_ARTIFICIAL_VISCOSITY`]; 0 for exact energy
+    /// conservation).
     pub artificial_viscosity: Option<f64>,
     /// Density diffusion form.
     #[serde(default)]
@@ -172,9 +172,13 @@ pub struct FluidSection {
 /// The delta-SPH coefficient `boundary = "bi"` gets when `fluid.delta` is left out.
 pub const DEFAULT_BI_DELTA: f64 = 0.1;
 
-/// The artificial viscosity `boundary = "bi"` gets when `fluid.artificial_viscosity` is left
-/// out: with it a tank at rest stays within 1% of `sqrt(g H)` (`bisph validate still-water`).
-pub const DEFAULT_BI_ALPHA: f64 = 0.05;
+/// The artificial viscosity every wall model gets when `fluid.artificial_viscosity` is left
+/// out. The `bi` and `usaw` operators are not skew-adjoint and gain energy without
+/// dissipation; the energy-conserving walls have no static rest state next to a side wall
+/// (zeroth-order consistency), and without dissipation the explicit scheme blows up from
+/// still water. With it a tank at rest stays within 1% of `sqrt(g H)` (`bisph validate
+/// still-water`).
+pub const DEFAULT_ARTIFICIAL_VISCOSITY: f64 = 0.05;
 
 impl Case {
     /// The delta-SPH coefficient in force: `fluid.delta`, or the wall model's default.
@@ -185,15 +189,43 @@ impl Case {
         })
     }
 
-    /// The artificial viscosity `alpha` in force: `fluid.artificial_viscosity`, or the wall
-    /// model's default.
+    /// The artificial viscosity `alpha` in force: `fluid.artificial_viscosity`, or
+    /// [`DEFAULT_ARTIFICIAL_VISCOSITY`].
     pub fn artificial_viscosity(&self) -> f64 {
         self.fluid
             .artificial_viscosity
-            .unwrap_or(match self.boundary {
-                BoundaryName::Bi => DEFAULT_BI_ALPHA,
-                BoundaryName::Energy | BoundaryName::Usaw => 0.0,
-            })
+            .unwrap_or(DEFAULT_ARTIFICIAL_VISCOSITY)
+    }
+
+    /// The equation of state in force: `fluid.eos`, or the wall model's (Tait for `usaw`).
+    pub fn eos_name(&self) -> EosName {
+        self.fluid.eos.unwrap_or(match self.boundary {
+            BoundaryName::Usaw => EosName::Tait,
+            BoundaryName::Energy | BoundaryName::Bi => EosName::Linear,
+        })
+    }
+
+    /// The mass rule of block `block`: `mass`, or the wall model's (`"initial"` for `usaw`).
+    pub fn mass_rule(&self, block: &FluidBlock) -> MassRule {
+        block.mass.unwrap_or(match self.boundary {
+            BoundaryName::Usaw => MassRule::Initial,
+            BoundaryName::Energy | BoundaryName::Bi => MassRule::Reference,
+        })
+    }
+
+    /// `true` when block `block` is relaxed to fit usaw walls before the run: `fill = "usaw"`,
+    /// or, with `boundary = "usaw"` in 2-D, a lattice block whose `fill` is left out (on the
+    /// bare lattice the usaw operators are far from rest next to the walls).
+    pub fn fills_for_usaw(&self, block: &FluidBlock) -> bool {
+        match block.fill.as_deref() {
+            Some(fill) => fill == "usaw",
+            None => {
+                self.boundary == BoundaryName::Usaw
+                    && self.dim == 2
+                    && block.shape != "particles"
+                    && !block.solid
+            }
+        }
     }
 
     /// The kinematic viscosity of the Laplacian [m^2/s]: `fluid.viscosity` plus the
@@ -557,10 +589,12 @@ pub struct FluidBlock {
     /// Regions cut out of the block (e.g. an airfoil in a box).
     #[serde(default)]
     pub hole: Vec<ShapeSpec>,
-    /// `"lattice"` (default), `"bipi"`: pack the block with BIPI before running, or `"usaw"`
-    /// (2-D, `boundary = "usaw"`): relax the lattice so that the usaw operators' zero-order
+    /// `"lattice"`, `"bipi"`: pack the block with BIPI before running, or `"usaw"` (2-D,
+    /// `boundary = "usaw"`): relax the lattice so that the usaw operators' zero-order
     /// residual (vertex particles included) vanishes and, under gravity, so that still water
-    /// is at rest (`bisph_core::walls::usaw::relax_positions`, `balance_positions`).
+    /// is at rest (`bisph_core::walls::usaw::relax_positions`, `balance_positions`). Default:
+    /// `"usaw"` for 2-D blocks with `boundary = "usaw"`, else `"lattice"`
+    /// ([`Case::fills_for_usaw`]).
     pub fill: Option<String>,
     /// Particle spacing of this block (default `resolution.dx`).
     pub dx: Option<f64>,
@@ -580,12 +614,13 @@ pub struct FluidBlock {
     /// `cos(pi/2 (r_axis - start) / length)` (the Lobovsky initial condition: hydrostatic at
     /// the back wall, zero at the dam face).
     pub pressure_taper: Option<TaperSpec>,
-    /// Particle masses: `"reference"` (`rho0 dx^d`, default) or `"initial"` (`rho dx^d` with
-    /// the initial density, for a fluid that starts compressed). With `boundary = "usaw"` and
-    /// every block `"initial"`, the vertex particles' masses follow: `rho_v V_v` with their
-    /// initial extrapolated densities.
-    #[serde(default)]
-    pub mass: MassRule,
+    /// Particle masses: `"reference"` (`rho0 dx^d`) or `"initial"` (`rho dx^d` with the
+    /// initial density, for a fluid that starts compressed). Default: `"initial"` with
+    /// `boundary = "usaw"` (volumes that tile the lattice, so the hydrostatic start weighs
+    /// what its pressure says), else `"reference"` ([`Case::mass_rule`]). With `boundary =
+    /// "usaw"` and every block `"initial"`, the vertex particles' masses follow: `rho_v V_v`
+    /// with their initial extrapolated densities.
+    pub mass: Option<MassRule>,
 }
 
 /// `pressure_taper` of a fluid block.
@@ -601,11 +636,10 @@ pub struct TaperSpec {
 }
 
 /// How particle masses are set.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum MassRule {
     /// `rho0 dx^d`.
-    #[default]
     Reference,
     /// `rho_i dx^d` with the initial density.
     Initial,
@@ -960,7 +994,7 @@ pub struct SettleSection {
     /// At rest when speeds are below `tolerance sqrt(g H)` and accelerations below
     /// `tolerance sqrt(g H) beta` (default 1e-3).
     pub tolerance: Option<f64>,
-    /// Most settling time [s] (default `50 / beta`).
+    /// Most settling time [s] (default `200 / beta`).
     pub max_time: Option<f64>,
 }
 

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 pub const DEFAULT_TOLERANCE: f64 = 1e-3;
 
 /// Settling time over `1 / beta` when `settle.max_time` is left out.
-const DEFAULT_MAX_TIME_BETA: f64 = 50.0;
+const DEFAULT_MAX_TIME_BETA: f64 = 200.0;
 
 /// Kinetic energy over `M g H` above which the fluid counts as flowing.
 const FLOW_KINETIC: f64 = 1e-3;
