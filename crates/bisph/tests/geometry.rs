@@ -109,19 +109,11 @@ fn a_block_overlapping_a_wall_is_refused() {
     refused(
         "overlap-2d",
         &case,
-        &["key `fluid_block[0]`", "overlaps wall[0]", "0.001 dx"],
-    );
-}
-
-#[test]
-fn a_block_too_close_to_a_wall_is_refused() {
-    let case = format!(
-        "{TANK_2D}{BOX_WALL_2D}[[fluid_block]]\nshape = \"box\"\nmin = [-0.02498, 0.0]\nmax = [0.47502, 0.5]\n"
-    );
-    refused(
-        "close-2d",
-        &case,
-        &["key `fluid_block[0]`", "overlaps wall[0]", "in front of it"],
+        &[
+            "key `fluid_block[0]`",
+            "overlaps wall[0]",
+            "0.175 m behind it",
+        ],
     );
 }
 

@@ -1,5 +1,5 @@
-//! Geometry checked before a run: every fluid particle in front of the walls (on the side
-//! their normals point away from) and clear of them, closed walls drawn the right way round,
+//! Geometry checked before a run: every fluid particle on or in front of the walls (on the
+//! side their normals point away from), closed walls drawn the right way round,
 //! 2-D wall polygons that do not cross themselves. Each mistake is a [`GeometryError`] naming
 //! the block or wall, a position and what was expected.
 
@@ -11,10 +11,6 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::ops::Range;
-
-/// The least distance of a fluid particle in front of a wall, as a fraction of its block's
-/// particle spacing.
-pub const MIN_WALL_CLEARANCE_OVER_DX: f64 = 0.001;
 
 /// Particles of each block tested with the exact signed distance whatever their distance to
 /// the walls (the rest are tested within the kernel support only).
@@ -149,9 +145,6 @@ fn check_block<V: Vector>(
     if particles.is_empty() {
         return Ok(());
     }
-    let block = &loaded.case.fluid_block[k];
-    let dx = block.dx.unwrap_or(loaded.case.resolution.dx);
-    let clearance = MIN_WALL_CLEARANCE_OVER_DX * dx;
     let positions = &sim.fluid.position[particles.clone()];
     let support = sim.config.kernel.support;
     let near: Vec<(usize, f64)> = positions
@@ -159,7 +152,7 @@ fn check_block<V: Vector>(
         .enumerate()
         .filter_map(|(i, &x)| {
             let d = sim.walls.signed_distance(x, support)?;
-            (d > -clearance).then_some((i, d))
+            (d > 0.0).then_some((i, d))
         })
         .collect();
     let stride = positions.len().div_ceil(FAR_SAMPLES).max(1);
@@ -175,7 +168,7 @@ fn check_block<V: Vector>(
     }
     let Some(&(i, d)) = near.first() else {
         return match samples.iter().zip(&far).find(|(_, &d)| d > 0.0) {
-            Some((&i, &d)) => Err(overlap(loaded, sim, layout, &key, positions[i], d, 1, dx)),
+            Some((&i, &d)) => Err(overlap(loaded, sim, layout, &key, positions[i], d, 1)),
             None => Ok(()),
         };
     };
@@ -187,12 +180,10 @@ fn check_block<V: Vector>(
         positions[i],
         d,
         near.len(),
-        dx,
     ))
 }
 
-/// A block with particles behind or too close to a wall.
-#[allow(clippy::too_many_arguments)]
+/// A block with particles behind a wall.
 fn overlap<V: Vector>(
     loaded: &LoadedCase,
     sim: &Simulation<V>,
@@ -201,23 +192,16 @@ fn overlap<V: Vector>(
     x: V,
     d: f64,
     count: usize,
-    dx: f64,
 ) -> CaseError {
     let wall = nearest_wall(sim, layout, x);
-    let place = if d > 0.0 {
-        format!("{} m behind it", num(d))
-    } else {
-        format!("only {} m in front of it", num(-d))
-    };
     loaded.error(
         key,
         format!(
-            "the block overlaps wall[{wall}]: its particle at {} lies {place} ({count} of its \
-             particles lie behind a wall or closer than {MIN_WALL_CLEARANCE_OVER_DX} dx); \
-             expected every particle at least {} m ({MIN_WALL_CLEARANCE_OVER_DX} dx) in front of \
-             the walls: shrink the block or give it holes where the walls are",
+            "the block overlaps wall[{wall}]: its particle at {} lies {} m behind it ({count} of \
+             its particles lie behind a wall); expected every particle on or in front of the \
+             walls: shrink the block or give it holes where the walls are",
             point(x),
-            num(MIN_WALL_CLEARANCE_OVER_DX * dx)
+            num(d)
         ),
     )
 }
