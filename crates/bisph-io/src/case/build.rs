@@ -9,6 +9,7 @@ use crate::case::schema::LoadedCase;
 use crate::case::schema::ToleranceReference;
 use crate::case::schema::{Case, FluidBlock, InitialPressure};
 use bisph_core::energy::{energy_scale, fluid_energies};
+use bisph_core::geometry::ElementShape;
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
@@ -16,6 +17,7 @@ use bisph_core::walls::shepard_bi::ShepardKind;
 use bisph_core::walls::usaw::WallInterpolation;
 use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
+use std::ops::Range;
 
 /// The equation of state of a case.
 pub fn eos_of(case: &Case) -> Eos {
@@ -37,6 +39,25 @@ pub fn eos_of(case: &Case) -> Eos {
 
 /// Builds the simulation of a checked case.
 pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, CaseError> {
+    build_simulation_with_layout(loaded).map(|(sim, _)| sim)
+}
+
+/// Where each `[[fluid_block]]` and `[[wall]]` of a case lies in the built simulation, in
+/// the order of the case file.
+#[derive(Debug, Clone, Default)]
+pub struct Layout {
+    /// The fluid particles of each block.
+    pub blocks: Vec<Range<usize>>,
+    /// The boundary elements of each wall.
+    pub walls: Vec<Range<usize>>,
+}
+
+/// Builds the simulation of a checked case and says which particles and elements come from
+/// which block and wall.
+pub fn build_simulation_with_layout<V: CaseDim>(
+    loaded: &LoadedCase,
+) -> Result<(Simulation<V>, Layout), CaseError> {
+    let mut layout = Layout::default();
     let case = &loaded.case;
     let dx = case.resolution.dx;
     let h = case.resolution.h_over_dx * dx;
@@ -104,14 +125,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             None => 0,
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
         };
-        let mut shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
-        if w.shape == "box" && w.fluid.as_deref() == Some("outside") {
-            // A box obstacle or body: normals into the box, out of the fluid around it.
-            for s in &mut shapes {
-                s.normal = -s.normal;
-                s.corners.reverse();
-            }
-        }
+        let shapes = oriented_wall_shapes::<V>(loaded, k, element_size)?;
         if V::DIM == 3 && body > 0 && (w.shape == "mesh" || w.shape == "capsule") {
             let mut surface = crate::case::mesh_walls::wall_surface(
                 loaded,
@@ -134,6 +148,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
         for s in shapes {
             elements.push(s.centre, s.normal, s.area, body, &s.corners);
         }
+        layout.walls.push(first as usize..elements.len());
         if let Some(st) = &w.stretch {
             let piston = 1 + case
                 .body
@@ -223,6 +238,7 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
             }
         });
         let mut points = points;
+        layout.blocks.push(fluid.len()..fluid.len() + points.len());
         if case.fills_for_usaw(block) {
             relax_for_usaw(
                 &kernel,
@@ -439,7 +455,25 @@ pub fn build_simulation<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>
     {
         sim.vertex_masses_from_density();
     }
-    Ok(sim)
+    Ok((sim, layout))
+}
+
+/// The elements of wall `k`, about `element_size` across, normals out of the fluid.
+pub fn oriented_wall_shapes<V: CaseDim>(
+    loaded: &LoadedCase,
+    k: usize,
+    element_size: f64,
+) -> Result<Vec<ElementShape<V>>, CaseError> {
+    let w = &loaded.case.wall[k];
+    let mut shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
+    if w.shape == "box" && w.fluid.as_deref() == Some("outside") {
+        // A box obstacle or body: normals into the box, out of the fluid around it.
+        for s in &mut shapes {
+            s.normal = -s.normal;
+            s.corners.reverse();
+        }
+    }
+    Ok(shapes)
 }
 
 fn eos_background(eos: &Eos) -> f64 {

@@ -224,7 +224,17 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     }
     for (k, b) in c.fluid_block.iter().enumerate() {
         let key = format!("fluid_block[{k}]");
-        check_shape(loaded, &key, &b.shape_spec(), d, true)?;
+        if b.shape == "walls" {
+            check_walls_block(loaded, k)?;
+        } else {
+            check_shape(loaded, &key, &b.shape_spec(), d, true)?;
+            if b.level.is_some() || b.clearance.is_some() {
+                return e(
+                    &key,
+                    "`level` and `clearance` belong to a shape = \"walls\" block".into(),
+                );
+            }
+        }
         for (m, hole) in b.hole.iter().enumerate() {
             let hkey = format!("{key}.hole[{m}]");
             if hole.shape == "particles" {
@@ -907,6 +917,60 @@ fn check_settle(loaded: &LoadedCase) -> Result<(), CaseError> {
         if body.motion.is_some() || body.piston.is_some() || body.free.is_some() {
             return refuse(format!("body[{k}] (\"{}\") moves", body.name));
         }
+    }
+    Ok(())
+}
+
+/// A `shape = "walls"` block: walls to fill, gravity, a finite `level` and `clearance`, no
+/// holes (obstacles are walls) and no packing.
+fn check_walls_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let b = &c.fluid_block[k];
+    let key = format!("fluid_block[{k}]");
+    let e = |sub: &str, msg: &str| Err(loaded.error(&format!("{key}{sub}"), msg.to_string()));
+    if c.wall.is_empty() {
+        return e(
+            ".shape",
+            "\"walls\" fills the case's walls, but it has no [[wall]]",
+        );
+    }
+    if c.fluid.gravity.iter().all(|g| *g == 0.0) {
+        return e(
+            ".shape",
+            "\"walls\" fills up to a level along gravity: fluid.gravity must not be zero",
+        );
+    }
+    match b.level {
+        None => {
+            return e(
+                ".level",
+                "missing: the height along -g up to which the walls are filled",
+            )
+        }
+        Some(l) if !l.is_finite() => {
+            return e(".level", &format!("expected a finite height, found {l}"))
+        }
+        _ => {}
+    }
+    if let Some(r) = b.clearance {
+        if !(r.is_finite() && r >= 0.0) {
+            return e(
+                ".clearance",
+                &format!("expected zero or a positive fraction of dx, found {r}"),
+            );
+        }
+    }
+    if !b.hole.is_empty() {
+        return e(
+            ".hole",
+            "a \"walls\" block has no holes: obstacles inside the walls are cut out already",
+        );
+    }
+    if b.bipi() {
+        return e(
+            ".fill",
+            "a \"walls\" block is filled on the lattice (\"lattice\" or \"usaw\")",
+        );
     }
     Ok(())
 }

@@ -27,6 +27,9 @@ pub fn block_points<V: CaseDim>(
             .map_err(|m| loaded.error(&format!("{key}.file"), m))?;
         return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
     }
+    if block.shape == "walls" {
+        return crate::case::wall_fill::fill_inside_walls::<V>(loaded, k, dx);
+    }
     if block.bipi() {
         let packed = crate::case::fill::pack_block::<V>(loaded, k, &mut |_| {})?;
         return Ok(packed.packer.positions);

@@ -8,11 +8,13 @@ pub mod check;
 pub mod dim;
 pub mod error;
 pub mod fill;
+pub mod geometry_check;
 pub mod load;
 pub mod mesh_walls;
 pub mod regions;
 pub mod resources;
 pub mod schema;
+pub mod wall_fill;
 
 pub use build::build_simulation;
 pub use check::check_case;

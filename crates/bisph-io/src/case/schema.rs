@@ -562,8 +562,14 @@ pub enum InitialPressure {
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
     /// `"box"`, `"polygon"` (2-D), `"polygon_file"` (2-D), `"stl"` (3-D), `"sphere"` (3-D,
-    /// a generated closed mesh) or `"particles"` (positions from a CSV file).
+    /// a generated closed mesh), `"particles"` (positions from a CSV file) or `"walls"` (the
+    /// fluid inside the case's walls below `level`).
     pub shape: String,
+    /// `shape = "walls"`: the height along `-g` up to which the walls are filled.
+    pub level: Option<f64>,
+    /// `shape = "walls"`: the least distance of a particle from a wall, in units of the
+    /// block's spacing (default 0.5).
+    pub clearance: Option<f64>,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.

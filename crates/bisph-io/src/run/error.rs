@@ -1,6 +1,7 @@
 //! What can stop a run, with its exit status.
 
 use crate::case::error::CaseError;
+use crate::case::geometry_check::GeometryError;
 use crate::formats::files::OutputError;
 use crate::run::checkpoint::CheckpointError;
 use crate::run::diagnostics::Diagnosis;
@@ -11,6 +12,8 @@ use std::path::PathBuf;
 pub enum RunError {
     /// The case is wrong.
     Case(CaseError),
+    /// The case's geometry is wrong (found before the first step; nothing is written).
+    Geometry(GeometryError),
     /// An output could not be written (the last checkpoint on disk is kept).
     Output(OutputError),
     /// A checkpoint was refused.
@@ -36,6 +39,7 @@ impl RunError {
     pub fn exit_code(&self) -> u8 {
         match self {
             RunError::Case(_) => 1,
+            RunError::Geometry(_) => 7,
             RunError::Output(_) => 4,
             RunError::Checkpoint(_) => 5,
             RunError::Resources(_) => 6,
@@ -49,6 +53,7 @@ impl std::fmt::Display for RunError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             RunError::Case(e) => write!(f, "{e}"),
+            RunError::Geometry(e) => write!(f, "{e}"),
             RunError::Output(e) => write!(f, "{e}"),
             RunError::Checkpoint(e) => write!(f, "{e}"),
             RunError::Resources(e) => write!(f, "{e}"),

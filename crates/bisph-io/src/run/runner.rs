@@ -1,6 +1,7 @@
 //! Runs a case to its end time, writing the outputs of the command-line contract.
 
-use crate::case::build::build_simulation;
+use crate::case::build::build_simulation_with_layout;
+use crate::case::geometry_check::check_geometry;
 
 use crate::case::dim::CaseDim;
 use crate::case::schema::LoadedCase;
@@ -436,7 +437,8 @@ pub fn run<V: CaseDim>(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
     crate::case::resources::check_memory(loaded).map_err(RunError::Resources)?;
-    let mut sim: Simulation<V> = build_simulation(loaded).map_err(RunError::Case)?;
+    let (mut sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
+    check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
     at(out, std::fs::create_dir_all(out))?;
     let case = &loaded.case;
     let end = case.time.end;
