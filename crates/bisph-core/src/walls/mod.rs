@@ -604,6 +604,19 @@ pub trait WallModel<V: Vector>: Sync {
         discrete
     }
 
+    /// The Shepard factor `gamma_i` that divides the viscous Laplacian (paper 3, eq 18) of a
+    /// particle at `x` when the model does not renormalise its operators (those that do divide
+    /// the Laplacian by [`WallModel::renormalisation`] instead, and leave this at 1).
+    fn laplacian_gamma(
+        &self,
+        _kernel: &Wendland,
+        _x: V,
+        _elements: &BoundaryElements<V>,
+        _grid: &CellGrid<V>,
+    ) -> f64 {
+        1.0
+    }
+
     /// Wall part of the viscous acceleration of a particle at `x` with velocity `u`: the
     /// laminar wall shear of paper 3 eqs 18-20, [`Viscosity::wall_shear`] summed over the
     /// elements with `|grad gamma_is| = W_is s_s` (one-point quadrature). Models with an
