@@ -25,7 +25,8 @@ use crate::terms::{
     Viscosity,
 };
 use crate::walls::energy_bi::ListedEnergyWalls;
-use crate::walls::usaw::{self, Vertices};
+use crate::walls::shepard::Shepard;
+use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -389,19 +390,17 @@ impl<V: Vector> Simulation<V> {
     }
 
     /// Sets every particle's gamma to the geometric Shepard factor (paper 2) and its
-    /// `grad gamma` (paper 3, eq 10) at the current positions.
+    /// `grad gamma` (paper 3, eq 10) at the current positions ([`Shepard::initialise`]).
     pub fn geometric_gamma(&mut self) {
-        let kernel = self.config.kernel;
-        let (e, g) = (&self.walls.elements, &self.walls.grid);
         let f = &mut self.fluid;
-        f.gamma
-            .par_iter_mut()
-            .zip(f.grad_gamma.par_iter_mut())
-            .zip(f.position.par_iter())
-            .for_each(|((gamma, grad), &x)| {
-                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
-                *grad = usaw::grad_gamma(&kernel, x, e, g);
-            });
+        Shepard::initialise(
+            &self.config.kernel,
+            &self.walls.elements,
+            &self.walls.grid,
+            &f.position,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+        );
     }
 
     /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]).
@@ -1023,9 +1022,8 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Advances gamma after a drift `r += u dt` (paper 3, eq 4, fixed walls):
-/// `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (trapezoidal line integral), or the
-/// geometric value when so chosen. Does nothing for models without gamma.
+/// Advances the gamma the particles carry after a drift `r += u dt` ([`Shepard::advance`]).
+/// Does nothing for models whose particles carry none.
 pub(crate) fn advance_gamma<V: Vector>(
     config: &SimConfig<V>,
     walls: &Walls<V>,
@@ -1035,25 +1033,11 @@ pub(crate) fn advance_gamma<V: Vector>(
     drift: &[V],
     dt: f64,
 ) {
-    if !config.wall_model.needs_gamma() {
+    let Some(shepard) = config.wall_model.shepard().filter(|s| s.carried) else {
         return;
-    }
-    let kernel = config.kernel;
+    };
     let (e, g) = (&walls.elements, &walls.grid);
-    let integrate = config.wall_model.integrates_gamma();
-    gamma
-        .par_iter_mut()
-        .zip(grad_gamma.par_iter_mut())
-        .zip(position.par_iter().zip(drift.par_iter()))
-        .for_each(|((gamma, grad), (&x, &u))| {
-            let new = usaw::grad_gamma(&kernel, x, e, g);
-            if integrate {
-                *gamma += (*grad + new).dot(u) * (0.5 * dt);
-            } else {
-                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
-            }
-            *grad = new;
-        });
+    shepard.advance(&config.kernel, e, g, gamma, grad_gamma, position, drift, dt);
 }
 
 /// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall

@@ -3,7 +3,8 @@
 
 use crate::dim::Vector;
 use crate::walls::energy_bi::{EnergyConservingWalls, ListedEnergyWalls};
-use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
+use crate::walls::shepard::{Shepard, ShepardKind};
+use crate::walls::shepard_bi::ShepardWalls;
 use crate::walls::usaw::{UsawWalls, Vertices, WallInterpolation};
 use crate::walls::WallModel;
 
@@ -20,12 +21,27 @@ pub enum WallModelChoice {
 }
 
 impl WallModelChoice {
-    /// `true` when the particles carry an integrated gamma (paper 3, eq 4).
+    /// The Shepard strategy of a renormalised wall model (none for the energy-conserving
+    /// walls): the semi-analytical walls' particles always carry gamma, integrated in time
+    /// (paper 3, eq 4) or geometric.
+    pub fn shepard(&self) -> Option<Shepard> {
+        match self {
+            WallModelChoice::Energy => None,
+            WallModelChoice::ShepardBi(kind) => Some(Shepard::of(*kind)),
+            WallModelChoice::Usaw(p) => Some(Shepard {
+                kind: if p.geometric_gamma {
+                    ShepardKind::Geometric
+                } else {
+                    ShepardKind::Integrated
+                },
+                carried: true,
+            }),
+        }
+    }
+
+    /// `true` when the particles carry gamma (paper 3, eq 4).
     pub fn needs_gamma(&self) -> bool {
-        matches!(
-            self,
-            WallModelChoice::Usaw(_) | WallModelChoice::ShepardBi(ShepardKind::Integrated)
-        )
+        self.shepard().is_some_and(|s| s.carried)
     }
 
     /// `true` when the walls carry vertex particles (paper 3, table 1), which also makes
@@ -37,16 +53,8 @@ impl WallModelChoice {
     /// `true` when the wall model itself evaluates the geometric Shepard factor (paper 2):
     /// geometric renormalisation, or gamma of the semi-analytical or integrated walls.
     pub fn evaluates_geometric_gamma(&self) -> bool {
-        matches!(self, WallModelChoice::ShepardBi(ShepardKind::Geometric)) || self.needs_gamma()
-    }
-
-    /// `true` when gamma is integrated in time (else recomputed geometrically every step).
-    pub(crate) fn integrates_gamma(&self) -> bool {
-        match self {
-            WallModelChoice::Usaw(p) => !p.geometric_gamma,
-            WallModelChoice::ShepardBi(ShepardKind::Integrated) => true,
-            _ => false,
-        }
+        self.shepard()
+            .is_some_and(|s| s.kind != ShepardKind::Discrete)
     }
 }
 
@@ -94,9 +102,9 @@ impl WallModelChoice {
                 Some(listed) => task.run(&listed),
                 None => task.run(&EnergyConservingWalls),
             },
-            WallModelChoice::ShepardBi(shepard) => task.run(&ShepardWalls {
+            WallModelChoice::ShepardBi(kind) => task.run(&ShepardWalls {
                 gravity: inputs.gravity,
-                shepard,
+                shepard: Shepard::of(kind),
             }),
             WallModelChoice::Usaw(params) => task.run(&UsawWalls {
                 vertices: inputs.vertices,

@@ -9,6 +9,7 @@ pub mod energy_bi;
 pub mod gamma_cache;
 pub mod geometric_shepard;
 pub mod integrated_shepard;
+pub mod shepard;
 pub mod shepard_bi;
 pub mod usaw;
 
