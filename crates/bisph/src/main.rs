@@ -44,7 +44,7 @@ struct ShepardArgs {
     /// `discrete` (sum over the case's fluid particles), `geometric` (walls only, paper 2)
     /// or `integrated` (2-D: grad gamma of the walls integrated along a path from gamma = 1).
     #[arg(long, default_value = "geometric")]
-    method: bisph_io::run::shepard::ShepardMethod,
+    method: bisph_core::walls::shepard::ShepardKind,
     /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,

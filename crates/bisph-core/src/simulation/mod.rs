@@ -6,8 +6,10 @@ mod midpoint;
 mod settings;
 mod settle;
 mod verlet;
+mod wall_models;
 
 pub use settings::{MidpointParams, SettleOutcome, SettleParams, SettleReport};
+pub use wall_models::{UsawParams, WallModelChoice};
 
 use crate::dim::Vector;
 use crate::energy::{fluid_energies, EnergyBudget};
@@ -22,68 +24,13 @@ use crate::terms::{
     compute_rates, particle_operators, DensityDiffusion, DiffusionForm, FluidNeighbours, RateModel,
     Viscosity,
 };
-use crate::walls::energy_bi::{EnergyConservingWalls, ListedEnergyWalls};
-use crate::walls::shepard_bi::{ShepardKind, ShepardWalls};
-use crate::walls::usaw::{self, UsawWalls, Vertices, WallInterpolation};
-use crate::walls::WallModel;
-use crate::walls::Walls;
+use crate::walls::energy_bi::ListedEnergyWalls;
+use crate::walls::shepard::Shepard;
+use crate::walls::usaw::Vertices;
+use crate::walls::{BoundaryElements, WallModel, Walls};
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// Which wall model a case uses (chosen once; the sweep is monomorphised for it).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum WallModelChoice {
-    /// Energy-conserving boundary integrals (paper 1). The default.
-    #[default]
-    Energy,
-    /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
-    ShepardBi(ShepardKind),
-    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
-    Usaw(UsawParams),
-}
-
-impl WallModelChoice {
-    /// `true` when the particles carry an integrated gamma (paper 3, eq 4).
-    pub fn needs_gamma(&self) -> bool {
-        matches!(
-            self,
-            WallModelChoice::Usaw(_) | WallModelChoice::ShepardBi(ShepardKind::Integrated)
-        )
-    }
-
-    /// `true` when the walls carry vertex particles (paper 3, table 1), which also makes
-    /// summation densities (eq 84) available.
-    pub fn has_vertex_particles(&self) -> bool {
-        matches!(self, WallModelChoice::Usaw(_))
-    }
-
-    /// `true` when the wall model itself evaluates the geometric Shepard factor (paper 2):
-    /// geometric renormalisation, or gamma of the semi-analytical or integrated walls.
-    pub fn evaluates_geometric_gamma(&self) -> bool {
-        matches!(self, WallModelChoice::ShepardBi(ShepardKind::Geometric)) || self.needs_gamma()
-    }
-
-    /// `true` when gamma is integrated in time (else recomputed geometrically every step).
-    fn integrates_gamma(&self) -> bool {
-        match self {
-            WallModelChoice::Usaw(p) => !p.geometric_gamma,
-            WallModelChoice::ShepardBi(ShepardKind::Integrated) => true,
-            _ => false,
-        }
-    }
-}
-
-/// Options of the semi-analytical walls.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub struct UsawParams {
-    /// How vertex pressures are extrapolated (paper 3, eqs 16-17, 82, 83).
-    pub interpolation: WallInterpolation,
-    /// Recompute gamma geometrically (paper 2) every step instead of integrating eq 4.
-    pub geometric_gamma: bool,
-    /// Walls push but never pull: the wall terms use the non-negative parts of the particle,
-    /// vertex and segment pressures ([`crate::walls::usaw::UsawWalls::no_tension`]).
-    pub no_wall_tension: bool,
-}
+use wall_models::{WallModelInputs, WallModelTask};
 
 /// Which density diffusion the continuity equation carries (off when its coefficient is 0).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -443,19 +390,17 @@ impl<V: Vector> Simulation<V> {
     }
 
     /// Sets every particle's gamma to the geometric Shepard factor (paper 2) and its
-    /// `grad gamma` (paper 3, eq 10) at the current positions.
+    /// `grad gamma` (paper 3, eq 10) at the current positions ([`Shepard::initialise`]).
     pub fn geometric_gamma(&mut self) {
-        let kernel = self.config.kernel;
-        let (e, g) = (&self.walls.elements, &self.walls.grid);
         let f = &mut self.fluid;
-        f.gamma
-            .par_iter_mut()
-            .zip(f.grad_gamma.par_iter_mut())
-            .zip(f.position.par_iter())
-            .for_each(|((gamma, grad), &x)| {
-                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
-                *grad = usaw::grad_gamma(&kernel, x, e, g);
-            });
+        Shepard::initialise(
+            &self.config.kernel,
+            &self.walls.elements,
+            &self.walls.grid,
+            &f.position,
+            &mut f.gamma,
+            &mut f.grad_gamma,
+        );
     }
 
     /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]).
@@ -804,86 +749,47 @@ impl<V: Vector> Simulation<V> {
         } else {
             FluidNeighbours::Grid(grid)
         };
-        self.timings.wall_pressure += match self.config.wall_model {
-            WallModelChoice::Energy if self.scratch.wall_pairs_listed => sweep(
-                &model,
-                &ListedEnergyWalls {
-                    particle_elements: &self.scratch.particle_elements,
-                    element_particles: &self.scratch.element_particles,
-                },
+        // The vertex values of the semi-analytical walls first (their pressures are the
+        // segments' wall pressures).
+        let vertex_start = Instant::now();
+        if let WallModelChoice::Usaw(params) = self.config.wall_model {
+            walls.vertices.update(
+                &model.kernel,
+                &eos,
+                model.gravity,
+                params.interpolation,
                 &state,
                 grid,
-                neighbours,
-                walls,
-                acceleration,
-                density_rate,
-                viscous_power,
-            ),
-            WallModelChoice::Energy => sweep(
-                &model,
-                &EnergyConservingWalls,
-                &state,
-                grid,
-                neighbours,
-                walls,
-                acceleration,
-                density_rate,
-                viscous_power,
-            ),
-            WallModelChoice::ShepardBi(shepard) => {
-                let bi = ShepardWalls {
-                    gravity: model.gravity,
-                    shepard,
-                };
-                sweep(
-                    &model,
-                    &bi,
-                    &state,
-                    grid,
-                    neighbours,
-                    walls,
-                    acceleration,
-                    density_rate,
-                    viscous_power,
-                )
-            }
-            WallModelChoice::Usaw(params) => {
-                let wall_start = Instant::now();
-                walls.vertices.update(
-                    &model.kernel,
-                    &eos,
-                    model.gravity,
-                    params.interpolation,
-                    &state,
-                    grid,
-                );
-                let Walls {
-                    elements,
-                    grid: wall_grid,
-                    vertices,
-                    ..
-                } = walls;
-                let usaw = UsawWalls {
-                    vertices,
-                    density_power: model.density_power,
-                    no_tension: params.no_wall_tension,
-                };
-                usaw.update_wall_pressure(&model.kernel, elements, &state, grid);
-                let wall_seconds = wall_start.elapsed().as_secs_f64();
-                compute_rates(
-                    &model,
-                    &usaw,
-                    &state,
-                    neighbours,
-                    elements,
-                    wall_grid,
-                    acceleration,
-                    density_rate,
-                    viscous_power,
-                );
-                wall_seconds
-            }
+            );
+        }
+        let vertex_seconds = vertex_start.elapsed().as_secs_f64();
+        let Walls {
+            elements,
+            grid: wall_grid,
+            vertices,
+            ..
+        } = walls;
+        let inputs = WallModelInputs {
+            gravity: model.gravity,
+            density_power: model.density_power,
+            vertices,
+            listed: self.scratch.wall_pairs_listed.then_some(ListedEnergyWalls {
+                particle_elements: &self.scratch.particle_elements,
+                element_particles: &self.scratch.element_particles,
+            }),
         };
+        let sweep = Sweep {
+            model: &model,
+            state: &state,
+            fluid_grid: grid,
+            neighbours,
+            elements,
+            wall_grid,
+            acceleration,
+            density_rate,
+            viscous_power,
+        };
+        self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
         self.viscous_power = if model.viscosity.active() {
             let p = &self.scratch.viscous_power;
             crate::energy::deterministic_sum(p.len(), |i| p[i])
@@ -924,51 +830,21 @@ impl<V: Vector> Simulation<V> {
             volume: &self.scratch.volume,
             gamma: &f.gamma,
         };
-        let (grid, walls) = (&self.fluid_grid, &self.walls);
-        let terms: Vec<f64> = (0..f.len())
-            .into_par_iter()
-            .map(|i| {
-                let op = match self.config.wall_model {
-                    WallModelChoice::Energy => particle_operators(
-                        &model,
-                        &EnergyConservingWalls,
-                        &state,
-                        FluidNeighbours::Grid(grid),
-                        &walls.elements,
-                        &walls.grid,
-                        i,
-                    ),
-                    WallModelChoice::ShepardBi(shepard) => particle_operators(
-                        &model,
-                        &ShepardWalls {
-                            gravity: model.gravity,
-                            shepard,
-                        },
-                        &state,
-                        FluidNeighbours::Grid(grid),
-                        &walls.elements,
-                        &walls.grid,
-                        i,
-                    ),
-                    WallModelChoice::Usaw(params) => particle_operators(
-                        &model,
-                        &UsawWalls {
-                            vertices: &walls.vertices,
-                            density_power: model.density_power,
-                            no_tension: params.no_wall_tension,
-                        },
-                        &state,
-                        FluidNeighbours::Grid(grid),
-                        &walls.elements,
-                        &walls.grid,
-                        i,
-                    ),
-                };
-                let grad = op.pressure_gradient + op.wall_pressure_gradient;
-                let div = op.velocity_divergence + op.wall_velocity_divergence;
-                state.volume[i] * (state.velocity[i].dot(grad) + state.pressure[i] * div)
-            })
-            .collect();
+        let walls = &self.walls;
+        let inputs = WallModelInputs {
+            gravity: model.gravity,
+            density_power: model.density_power,
+            vertices: &walls.vertices,
+            listed: None,
+        };
+        let residual = SkewResidual {
+            model: &model,
+            state: &state,
+            fluid_grid: &self.fluid_grid,
+            elements: &walls.elements,
+            wall_grid: &walls.grid,
+        };
+        let terms = self.config.wall_model.run(inputs, residual);
         terms.iter().sum()
     }
 
@@ -1146,9 +1022,8 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Advances gamma after a drift `r += u dt` (paper 3, eq 4, fixed walls):
-/// `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (trapezoidal line integral), or the
-/// geometric value when so chosen. Does nothing for models without gamma.
+/// Advances the gamma the particles carry after a drift `r += u dt` ([`Shepard::advance`]).
+/// Does nothing for models whose particles carry none.
 pub(crate) fn advance_gamma<V: Vector>(
     config: &SimConfig<V>,
     walls: &Walls<V>,
@@ -1158,54 +1033,81 @@ pub(crate) fn advance_gamma<V: Vector>(
     drift: &[V],
     dt: f64,
 ) {
-    if !config.wall_model.needs_gamma() {
+    let Some(shepard) = config.wall_model.shepard().filter(|s| s.carried) else {
         return;
-    }
-    let kernel = config.kernel;
+    };
     let (e, g) = (&walls.elements, &walls.grid);
-    let integrate = config.wall_model.integrates_gamma();
-    gamma
-        .par_iter_mut()
-        .zip(grad_gamma.par_iter_mut())
-        .zip(position.par_iter().zip(drift.par_iter()))
-        .for_each(|((gamma, grad), (&x, &u))| {
-            let new = usaw::grad_gamma(&kernel, x, e, g);
-            if integrate {
-                *gamma += (*grad + new).dot(u) * (0.5 * dt);
-            } else {
-                *gamma = crate::walls::geometric_shepard::gamma(&kernel, x, e, g);
-            }
-            *grad = new;
-        });
+    shepard.advance(&config.kernel, e, g, gamma, grad_gamma, position, drift, dt);
 }
 
 /// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall
 /// pressures.
-#[allow(clippy::too_many_arguments)]
-fn sweep<V: Vector, W: WallModel<V>>(
-    model: &RateModel<V>,
-    wall_model: &W,
-    state: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
-    neighbours: FluidNeighbours<'_, V>,
-    walls: &mut Walls<V>,
-    acceleration: &mut [V],
-    density_rate: &mut [f64],
-    viscous_power: &mut [f64],
-) -> f64 {
-    let start = Instant::now();
-    wall_model.update_wall_pressure(&model.kernel, &mut walls.elements, state, fluid_grid);
-    let wall_seconds = start.elapsed().as_secs_f64();
-    compute_rates(
-        model,
-        wall_model,
-        state,
-        neighbours,
-        &walls.elements,
-        &walls.grid,
-        acceleration,
-        density_rate,
-        viscous_power,
-    );
-    wall_seconds
+struct Sweep<'a, V: Vector> {
+    model: &'a RateModel<V>,
+    state: &'a FluidState<'a, V>,
+    fluid_grid: &'a CellGrid<V>,
+    neighbours: FluidNeighbours<'a, V>,
+    elements: &'a mut BoundaryElements<V>,
+    wall_grid: &'a CellGrid<V>,
+    acceleration: &'a mut [V],
+    density_rate: &'a mut [f64],
+    viscous_power: &'a mut [f64],
+}
+
+impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
+    type Output = f64;
+
+    fn run<W: WallModel<V>>(self, wall_model: &W) -> f64 {
+        let start = Instant::now();
+        let kernel = &self.model.kernel;
+        wall_model.update_wall_pressure(kernel, self.elements, self.state, self.fluid_grid);
+        let wall_seconds = start.elapsed().as_secs_f64();
+        compute_rates(
+            self.model,
+            wall_model,
+            self.state,
+            self.neighbours,
+            self.elements,
+            self.wall_grid,
+            self.acceleration,
+            self.density_rate,
+            self.viscous_power,
+        );
+        wall_seconds
+    }
+}
+
+/// Each particle's summand of the skew-adjointness residual (paper 3, eq 26),
+/// `V_a (u_a . Grad_a p + p_a Div_a u)` with the full operators of one wall model.
+struct SkewResidual<'a, V: Vector> {
+    model: &'a RateModel<V>,
+    state: &'a FluidState<'a, V>,
+    fluid_grid: &'a CellGrid<V>,
+    elements: &'a BoundaryElements<V>,
+    wall_grid: &'a CellGrid<V>,
+}
+
+impl<V: Vector> WallModelTask<V> for SkewResidual<'_, V> {
+    type Output = Vec<f64>;
+
+    fn run<W: WallModel<V>>(self, wall_model: &W) -> Vec<f64> {
+        let state = self.state;
+        (0..state.position.len())
+            .into_par_iter()
+            .map(|i| {
+                let op = particle_operators(
+                    self.model,
+                    wall_model,
+                    state,
+                    FluidNeighbours::Grid(self.fluid_grid),
+                    self.elements,
+                    self.wall_grid,
+                    i,
+                );
+                let grad = op.pressure_gradient + op.wall_pressure_gradient;
+                let div = op.velocity_divergence + op.wall_velocity_divergence;
+                state.volume[i] * (state.velocity[i].dot(grad) + state.pressure[i] * div)
+            })
+            .collect()
+    }
 }

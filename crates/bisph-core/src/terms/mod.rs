@@ -175,10 +175,9 @@ fn operators_with<V: Vector, W: WallModel<V>>(
         };
     }
     // Paper 3 eq 18 divides the Laplacian by gamma_i, the kernel's integral over the fluid;
-    // models that do not renormalise take it from the wall geometry (paper 2), which is
-    // exactly 1 away from walls, so fluid pairs there stay antisymmetric.
+    // models that do not renormalise supply it ([`WallModel::laplacian_gamma`]).
     let (viscous, wall_viscous) = if viscid {
-        let gamma = crate::walls::geometric_shepard::gamma(kernel, x_i, elements, wall_grid);
+        let gamma = wall_model.laplacian_gamma(kernel, x_i, elements, wall_grid);
         if gamma > 0.0 && gamma != 1.0 {
             (viscous / gamma, wall_viscous / gamma)
         } else {

@@ -8,7 +8,7 @@
 //! Then the fluid's power loss equals `sum_j f_j . U_j` for any particle state, and fixed walls
 //! exchange no power.
 
-use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
+use super::{geometric_shepard, BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, PairList};
@@ -21,6 +21,18 @@ pub struct EnergyConservingWalls;
 
 impl<V: Vector> WallModel<V> for EnergyConservingWalls {
     const RENORMALISE: bool = false;
+
+    /// The geometric Shepard factor of the walls (paper 2), exactly 1 away from walls, so
+    /// that fluid pairs there stay antisymmetric.
+    fn laplacian_gamma(
+        &self,
+        kernel: &Wendland,
+        x: V,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> f64 {
+        geometric_shepard::gamma(kernel, x, elements, grid)
+    }
 
     fn update_wall_pressure(
         &self,
@@ -130,6 +142,18 @@ impl<V: Vector> ListedEnergyWalls<'_, V> {
 
 impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
     const RENORMALISE: bool = false;
+
+    /// The geometric Shepard factor of the walls (paper 2), exactly 1 away from walls, so
+    /// that fluid pairs there stay antisymmetric.
+    fn laplacian_gamma(
+        &self,
+        kernel: &Wendland,
+        x: V,
+        elements: &BoundaryElements<V>,
+        grid: &CellGrid<V>,
+    ) -> f64 {
+        geometric_shepard::gamma(kernel, x, elements, grid)
+    }
 
     fn update_wall_pressure(
         &self,

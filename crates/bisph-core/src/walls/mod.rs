@@ -9,6 +9,7 @@ pub mod energy_bi;
 pub mod gamma_cache;
 pub mod geometric_shepard;
 pub mod integrated_shepard;
+pub mod shepard;
 pub mod shepard_bi;
 pub mod usaw;
 
@@ -602,6 +603,19 @@ pub trait WallModel<V: Vector>: Sync {
         _grid: &CellGrid<V>,
     ) -> f64 {
         discrete
+    }
+
+    /// The Shepard factor `gamma_i` that divides the viscous Laplacian (paper 3, eq 18) of a
+    /// particle at `x` when the model does not renormalise its operators (those that do divide
+    /// the Laplacian by [`WallModel::renormalisation`] instead, and leave this at 1).
+    fn laplacian_gamma(
+        &self,
+        _kernel: &Wendland,
+        _x: V,
+        _elements: &BoundaryElements<V>,
+        _grid: &CellGrid<V>,
+    ) -> f64 {
+        1.0
     }
 
     /// Wall part of the viscous acceleration of a particle at `x` with velocity `u`: the

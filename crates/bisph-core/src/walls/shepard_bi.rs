@@ -3,12 +3,13 @@
 //! - `<grad p>_i = (1/gamma_i) [ -sum_j (p_j + p_i) grad W_ij V_j + sum_k (p_k + p_i) n_k W_ik s_k ]`;
 //! - `<div u>_i = (1/gamma_i) [ -sum_j (u_j - u_i) . grad W_ij V_j + sum_k (U_k - u_i) . n_k W_ik s_k ]`;
 //!
-//! with the discrete Shepard factor `gamma_i = sum_j W_ij V_j` (paper 2, eq 4) or the geometric
-//! one (paper 2, from the walls alone), and the wall
+//! with the Shepard factor of a [`Shepard`] strategy (discrete, geometric or integrated), and the wall
 //! pressure `p_k` extrapolated from the fluid with the hydrostatic correction,
 //! `p_k = sum_j (p_j + rho_j g . (r_k - r_j)) W_kj V_j / sum_j W_kj V_j`.
 //! These operators are not skew-adjoint: energy is not conserved (paper 1, section 4).
 
+use super::shepard::Shepard;
+pub use super::shepard::ShepardKind;
 use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
@@ -16,26 +17,13 @@ use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
-/// How the Shepard factor `gamma_i` is obtained.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ShepardKind {
-    /// `gamma_i = sum_j W_ij V_j` over the fluid (paper 2, eq 4); free surfaces lower it too.
-    #[default]
-    Discrete,
-    /// From the wall elements alone (paper 2; [`super::geometric_shepard`]).
-    Geometric,
-    /// Integrated in time, `dgamma/dt = v_rel . grad gamma` (paper 3, eq 4), from the
-    /// geometric value at time zero ([`super::usaw`]).
-    Integrated,
-}
-
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShepardWalls<V> {
     /// Gravity, for the hydrostatic correction of the extrapolated wall pressure.
     pub gravity: V,
     /// Which Shepard factor renormalises the operators.
-    pub shepard: ShepardKind,
+    pub shepard: Shepard,
 }
 
 impl<V: Vector> WallModel<V> for ShepardWalls<V> {
@@ -76,7 +64,7 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
     }
 
     fn needs_discrete_shepard(&self) -> bool {
-        self.shepard == ShepardKind::Discrete
+        self.shepard == Shepard::of(ShepardKind::Discrete)
     }
 
     fn renormalisation(
@@ -88,11 +76,8 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         elements: &BoundaryElements<V>,
         grid: &CellGrid<V>,
     ) -> f64 {
-        match self.shepard {
-            ShepardKind::Discrete => discrete,
-            ShepardKind::Geometric => super::geometric_shepard::gamma(kernel, x, elements, grid),
-            ShepardKind::Integrated => state_gamma,
-        }
+        self.shepard
+            .gamma(kernel, x, discrete, state_gamma, elements, grid)
     }
 
     #[inline(always)]

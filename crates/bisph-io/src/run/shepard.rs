@@ -17,36 +17,11 @@ use crate::case::build::build_simulation;
 use crate::case::dim::CaseDim;
 use crate::case::schema::LoadedCase;
 use bisph_core::neighbours::CellGrid;
+use bisph_core::walls::shepard::ShepardKind;
 use bisph_core::walls::{geometric_shepard, integrated_shepard};
 use bisph_core::Simulation;
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// How gamma is computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ShepardMethod {
-    /// Sum over the fluid particles.
-    Discrete,
-    /// From the walls alone (paper 2).
-    Geometric,
-    /// `grad gamma` of the walls (paper 3, eqs 4, 9-10) integrated along a path from a point
-    /// where `gamma = 1` (2-D; see [`bisph_core::walls::integrated_shepard`]).
-    Integrated,
-}
-
-impl std::str::FromStr for ShepardMethod {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "discrete" => Ok(Self::Discrete),
-            "geometric" => Ok(Self::Geometric),
-            "integrated" => Ok(Self::Integrated),
-            _ => Err(format!(
-                "expected `discrete`, `geometric` or `integrated`, found `{s}`"
-            )),
-        }
-    }
-}
 
 /// Reads the points of `path`: `dim` comma-separated numbers per line. Errors name the file,
 /// the line and what was expected.
@@ -116,20 +91,20 @@ pub fn parse_points(file: &str, text: &str, dim: usize) -> Result<Vec<[f64; 3]>,
 pub fn gamma_at<V: CaseDim>(
     loaded: &LoadedCase,
     points: &[[f64; 3]],
-    method: ShepardMethod,
+    method: ShepardKind,
 ) -> Result<Vec<f64>, String> {
     let sim: Simulation<V> = build_simulation(loaded).map_err(|e| e.to_string())?;
     let kernel = sim.config.kernel;
     let points: Vec<V> = points.iter().map(|p| V::from_slice(p)).collect();
     Ok(match method {
-        ShepardMethod::Geometric => {
+        ShepardKind::Geometric => {
             let walls = &sim.walls;
             points
                 .iter()
                 .map(|&x| geometric_shepard::gamma(&kernel, x, &walls.elements, &walls.grid))
                 .collect()
         }
-        ShepardMethod::Integrated => {
+        ShepardKind::Integrated => {
             let walls = &sim.walls;
             // Any path that stays in the fluid fits in the walls' bounding box, plus the support.
             let (mut lo, mut hi) = (V::from_slice(&[f64::MAX; 3]), V::from_slice(&[f64::MIN; 3]));
@@ -159,7 +134,7 @@ pub fn gamma_at<V: CaseDim>(
                 })
                 .collect::<Result<_, _>>()?
         }
-        ShepardMethod::Discrete => {
+        ShepardKind::Discrete => {
             let fluid = &sim.fluid;
             let mut grid = CellGrid::new(kernel.support);
             grid.rebuild(&fluid.position);
@@ -181,7 +156,7 @@ pub fn gamma_at<V: CaseDim>(
 pub fn shepard_table(
     loaded: &LoadedCase,
     points_file: &Path,
-    method: ShepardMethod,
+    method: ShepardKind,
 ) -> Result<String, String> {
     let dim = loaded.case.dim as usize;
     let points = read_points(points_file, dim)?;

@@ -1,0 +1,116 @@
+//! Which wall model a case uses, and the one place that turns that choice into a
+//! [`WallModel`], so that every sweep over the particles is monomorphised for it.
+
+use crate::dim::Vector;
+use crate::walls::energy_bi::{EnergyConservingWalls, ListedEnergyWalls};
+use crate::walls::shepard::{Shepard, ShepardKind};
+use crate::walls::shepard_bi::ShepardWalls;
+use crate::walls::usaw::{UsawWalls, Vertices, WallInterpolation};
+use crate::walls::WallModel;
+
+/// Which wall model a case uses (chosen once; the sweep is monomorphised for it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum WallModelChoice {
+    /// Energy-conserving boundary integrals (paper 1). The default.
+    #[default]
+    Energy,
+    /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
+    ShepardBi(ShepardKind),
+    /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
+    Usaw(UsawParams),
+}
+
+impl WallModelChoice {
+    /// The Shepard strategy of a renormalised wall model (none for the energy-conserving
+    /// walls): the semi-analytical walls' particles always carry gamma, integrated in time
+    /// (paper 3, eq 4) or geometric.
+    pub fn shepard(&self) -> Option<Shepard> {
+        match self {
+            WallModelChoice::Energy => None,
+            WallModelChoice::ShepardBi(kind) => Some(Shepard::of(*kind)),
+            WallModelChoice::Usaw(p) => Some(Shepard {
+                kind: if p.geometric_gamma {
+                    ShepardKind::Geometric
+                } else {
+                    ShepardKind::Integrated
+                },
+                carried: true,
+            }),
+        }
+    }
+
+    /// `true` when the particles carry gamma (paper 3, eq 4).
+    pub fn needs_gamma(&self) -> bool {
+        self.shepard().is_some_and(|s| s.carried)
+    }
+
+    /// `true` when the walls carry vertex particles (paper 3, table 1), which also makes
+    /// summation densities (eq 84) available.
+    pub fn has_vertex_particles(&self) -> bool {
+        matches!(self, WallModelChoice::Usaw(_))
+    }
+
+    /// `true` when the wall model itself evaluates the geometric Shepard factor (paper 2):
+    /// geometric renormalisation, or gamma of the semi-analytical or integrated walls.
+    pub fn evaluates_geometric_gamma(&self) -> bool {
+        self.shepard()
+            .is_some_and(|s| s.kind != ShepardKind::Discrete)
+    }
+}
+
+/// Options of the semi-analytical walls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct UsawParams {
+    /// How vertex pressures are extrapolated (paper 3, eqs 16-17, 82, 83).
+    pub interpolation: WallInterpolation,
+    /// Recompute gamma geometrically (paper 2) every step instead of integrating eq 4.
+    pub geometric_gamma: bool,
+    /// Walls push but never pull: the wall terms use the non-negative parts of the particle,
+    /// vertex and segment pressures ([`crate::walls::usaw::UsawWalls::no_tension`]).
+    pub no_wall_tension: bool,
+}
+
+/// Work done with the wall model in use, whatever its type.
+pub(crate) trait WallModelTask<V: Vector> {
+    /// What the work returns.
+    type Output;
+    /// Does the work with `wall_model`.
+    fn run<W: WallModel<V>>(self, wall_model: &W) -> Self::Output;
+}
+
+/// What the wall models are built from besides the choice itself.
+pub(crate) struct WallModelInputs<'a, V: Vector> {
+    /// Gravity (the hydrostatic correction of the extrapolated wall pressure).
+    pub gravity: V,
+    /// The density power `k` of paper 3, eqs 37-38.
+    pub density_power: u8,
+    /// The vertex particles of the semi-analytical walls.
+    pub vertices: &'a Vertices<V>,
+    /// The energy-conserving walls' listed pairs, when listed (inside a midpoint step).
+    pub listed: Option<ListedEnergyWalls<'a, V>>,
+}
+
+impl WallModelChoice {
+    /// Runs `task` with the wall model of this choice built from `inputs`.
+    pub(crate) fn run<V: Vector, T: WallModelTask<V>>(
+        self,
+        inputs: WallModelInputs<'_, V>,
+        task: T,
+    ) -> T::Output {
+        match self {
+            WallModelChoice::Energy => match inputs.listed {
+                Some(listed) => task.run(&listed),
+                None => task.run(&EnergyConservingWalls),
+            },
+            WallModelChoice::ShepardBi(kind) => task.run(&ShepardWalls {
+                gravity: inputs.gravity,
+                shepard: Shepard::of(kind),
+            }),
+            WallModelChoice::Usaw(params) => task.run(&UsawWalls {
+                vertices: inputs.vertices,
+                density_power: inputs.density_power,
+                no_tension: params.no_wall_tension,
+            }),
+        }
+    }
+}
