@@ -275,6 +275,28 @@ impl<V: Vector> SimState<V> {
     /// Puts this state into `sim` (built from the same case) and rebuilds its cell grids.
     /// Fails, changing nothing, when the counts do not fit.
     pub fn restore(&self, sim: &mut Simulation<V>) -> Result<(), String> {
+        self.check_fluid_counts(sim)?;
+        self.check_wall_counts(sim)?;
+        self.check_fluid_values(sim)?;
+        self.check_wall_values(sim)?;
+        self.check_scalars()?;
+        self.check_bodies(sim)?;
+        self.put_scalars(sim);
+        self.put_fluid(sim);
+        self.put_walls(sim);
+        self.put_bodies(sim);
+        // A list that does not fit (a damaged file whose checksum still matched) is rebuilt at
+        // the next step instead.
+        let origin = &self.neighbour_origin;
+        sim.restore_neighbour_list((!origin.is_empty()).then_some(origin));
+        sim.walls.grid.rebuild(&sim.walls.elements.centre);
+        sim.walls.refresh_gamma();
+        Ok(())
+    }
+
+    /// The fluid arrays have one length, the case's particle count, and the ids are a
+    /// permutation of `0..n`.
+    fn check_fluid_counts(&self, sim: &Simulation<V>) -> Result<(), String> {
         let n = self.fluid.id.len();
         let f = &self.fluid;
         if [
@@ -313,6 +335,11 @@ impl<V: Vector> SimState<V> {
                 _ => return Err(format!("particle id {id} repeated or out of range")),
             }
         }
+        Ok(())
+    }
+
+    /// As many boundary elements and corners as the case builds.
+    fn check_wall_counts(&self, sim: &Simulation<V>) -> Result<(), String> {
         let e = &sim.walls.elements;
         let m = e.len();
         if [
@@ -334,8 +361,14 @@ impl<V: Vector> SimState<V> {
                 e.corners.len()
             ));
         }
+        Ok(())
+    }
+
+    /// Finite fluid values, positive densities, every particle inside the domain.
+    fn check_fluid_values(&self, sim: &Simulation<V>) -> Result<(), String> {
         let finite_v = |v: &[V]| v.iter().all(|x| x.is_finite());
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let f = &self.fluid;
         if !(finite_v(&f.velocity)
             && finite_v(&f.acceleration)
             && finite(&f.mass)
@@ -361,6 +394,14 @@ impl<V: Vector> SimState<V> {
                 p.to_xyz()
             ));
         }
+        Ok(())
+    }
+
+    /// Finite element values, and elements that do not spread far beyond the case's walls.
+    fn check_wall_values(&self, sim: &Simulation<V>) -> Result<(), String> {
+        let e = &sim.walls.elements;
+        let finite_v = |v: &[V]| v.iter().all(|x| x.is_finite());
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         if !(finite_v(&self.centre)
             && finite_v(&self.normal)
             && finite_v(&self.velocity)
@@ -390,6 +431,11 @@ impl<V: Vector> SimState<V> {
         if cells(&self.centre) > 64.0 * cells(&e.centre) + 1e6 {
             return Err("wall elements spread far beyond the case's walls".into());
         }
+        Ok(())
+    }
+
+    /// Finite piston states and scalars, and a time that is not negative.
+    fn check_scalars(&self) -> Result<(), String> {
         if self
             .pistons
             .iter()
@@ -415,6 +461,12 @@ impl<V: Vector> SimState<V> {
         {
             return Err("non-finite or negative scalars".into());
         }
+        Ok(())
+    }
+
+    /// The case's pistons and free bodies, each in a state one step cannot throw far away.
+    fn check_bodies(&self, sim: &Simulation<V>) -> Result<(), String> {
+        let (lo, hi) = (sim.config.domain_min, sim.config.domain_max);
         let pistons: Vec<u32> = sim
             .walls
             .bodies
@@ -482,6 +534,11 @@ impl<V: Vector> SimState<V> {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The time, step sizes, energy accounts and forcing state into `sim`.
+    fn put_scalars(&self, sim: &mut Simulation<V>) {
         sim.time = self.time;
         sim.step = self.step;
         sim.last_dt = self.last_dt;
@@ -496,6 +553,11 @@ impl<V: Vector> SimState<V> {
         sim.last_iterations = self.last_iterations;
         sim.last_residue = self.last_residue;
         sim.walls.placed_at = self.placed_at;
+    }
+
+    /// The fluid arrays into `sim`.
+    fn put_fluid(&self, sim: &mut Simulation<V>) {
+        let f = &self.fluid;
         let d = &mut sim.fluid;
         d.id.clone_from(&f.id);
         d.position.clone_from(&f.position);
@@ -510,6 +572,10 @@ impl<V: Vector> SimState<V> {
         d.gamma.clone_from(&f.gamma);
         d.grad_gamma.clone_from(&f.grad_gamma);
         d.density_offset.clone_from(&f.density_offset);
+    }
+
+    /// The boundary elements into `sim`.
+    fn put_walls(&self, sim: &mut Simulation<V>) {
         let e = &mut sim.walls.elements;
         e.centre.clone_from(&self.centre);
         e.normal.clone_from(&self.normal);
@@ -519,6 +585,10 @@ impl<V: Vector> SimState<V> {
         e.max_reach = self.max_reach;
         e.pressure.clone_from(&self.pressure);
         e.corners.clone_from(&self.corners);
+    }
+
+    /// The pistons' and free bodies' states into `sim`.
+    fn put_bodies(&self, sim: &mut Simulation<V>) {
         for &(b, position, velocity, acceleration) in &self.pistons {
             if let Motion::Piston(p) = &mut sim.walls.bodies[b as usize].motion {
                 p.position = position;
@@ -531,13 +601,6 @@ impl<V: Vector> SimState<V> {
                 set_free_body_values(f, values);
             }
         }
-        // A list that does not fit (a damaged file whose checksum still matched) is rebuilt at
-        // the next step instead.
-        let origin = &self.neighbour_origin;
-        sim.restore_neighbour_list((!origin.is_empty()).then_some(origin));
-        sim.walls.grid.rebuild(&sim.walls.elements.centre);
-        sim.walls.refresh_gamma();
-        Ok(())
     }
 }
 

@@ -15,6 +15,7 @@ use crate::run::error::RunError;
 use crate::run::outputs::Frames;
 use crate::run::settle::SettlingSummary;
 use bisph_core::energy::energy_scale;
+use bisph_core::simulation::MidpointParams;
 use bisph_core::walls::Motion;
 use bisph_core::Simulation;
 use serde::Serialize;
@@ -440,355 +441,526 @@ pub fn run<V: CaseDim>(
     let (mut sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
     check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
     at(out, std::fs::create_dir_all(out))?;
-    let case = &loaded.case;
-    let end = case.time.end;
     let checkpoint_path = out.join(checkpoint::FILE_NAME);
     let resumed = match options.resume {
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
     let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some())?;
+    let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
+    let ending = active.advance_to_end(&mut sim, options, progress)?;
+    active.finish(&mut sim, settling, ending)
+}
 
-    let mut probe_header = vec!["t".to_string()];
-    probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
-    let midpoint = match sim.config.integrator {
-        bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
-        bisph_core::simulation::Integrator::Verlet => None,
-    };
-    let headers = series_headers(&sim, &probe_header);
-    // Free bodies: one CSV each, and the fluid + bodies energy watched for the summary.
-    let has_free = sim
-        .walls
-        .bodies
-        .iter()
-        .any(|b| matches!(b.motion, Motion::Free(_)));
-    let free_csv_paths: Vec<PathBuf> = sim
-        .walls
-        .bodies
-        .iter()
-        .filter(|b| matches!(b.motion, Motion::Free(_)))
-        .map(|b| out.join(format!("body_{}.csv", b.name)))
-        .collect();
-    let body_energy = |sim: &Simulation<V>| {
-        let e = sim.energy();
-        let (k, p) = sim.walls.body_energy();
-        e.kinetic + e.compressible + e.potential + k + p
-    };
-    let fluid_body0 = body_energy(&sim);
+/// How the time loop of a run ended.
+enum Ending {
+    /// The end time was reached.
+    Reached,
+    /// A stop signal arrived (after a checkpoint when the case asks for one).
+    Interrupted,
+    /// A watch tripped or a step failed.
+    Tripped(Diagnosis),
+}
 
-    let RunStart {
-        mut outputs,
-        mut free_csv,
-        mut fluid_body_max,
-        mut frames,
-        mut counters,
-        mut history,
-        mut probe_history,
-        resumed_from_step,
-        ..
-    } = start_run(
-        loaded,
-        out,
-        &mut sim,
-        resumed,
-        &checkpoint_path,
-        &headers,
-        &free_csv_paths,
-    )?;
-    let case_source = std::fs::canonicalize(&loaded.source)
-        .map(|p| p.display().to_string())
-        .unwrap_or_else(|_| loaded.source.clone());
-    let every_steps = options
-        .checkpoint_steps
-        .unwrap_or(case.checkpoint.every_steps);
-    let every_seconds = 60.0
-        * options
-            .checkpoint_minutes
-            .unwrap_or(case.checkpoint.every_minutes);
-    let mut watch = Watch::new(case.diagnostics.clone());
+/// The fluid's kinetic, compressible and potential energy plus the free bodies' kinetic and
+/// gravity energy.
+fn fluid_and_body_energy<V: CaseDim>(sim: &Simulation<V>) -> f64 {
+    let e = sim.energy();
+    let (k, p) = sim.walls.body_energy();
+    e.kinetic + e.compressible + e.potential + k + p
+}
 
-    sim.timings = Default::default();
-    let started = Instant::now();
-    let wall_before = counters.wall_seconds;
-    let mut last_checkpoint = Instant::now();
-    let mut checkpoints = 0u64;
-    let mut skip_outputs = resumed_from_step.is_some();
-    let mut good = SimState::<V>::default();
-    let mut good_counters = counters.clone();
-    let mut good_rows = (history.len(), probe_history.len());
-    let mut interrupted = false;
-    let mut trip: Option<Diagnosis> = None;
-    let write_checkpoint = |good: &SimState<V>,
-                            counters: &RunCounters,
-                            history: &[[f64; checkpoint::ENERGY_COLUMNS]],
-                            probe_history: &[Vec<f64>]|
-     -> Result<(), OutputError> {
-        let c = Checkpoint {
-            case_source: case_source.clone(),
-            case_text: loaded.text.clone(),
-            sim: good.clone(),
-            run: counters.clone(),
-            history: history.to_vec(),
-            probe_history: probe_history.to_vec(),
+/// A run between its start and its end: the open outputs, the counters and histories a
+/// checkpoint saves, the last good state the watches fall back to, and the clocks.
+struct ActiveRun<'a, V: CaseDim> {
+    loaded: &'a LoadedCase,
+    out: &'a Path,
+    checkpoint_path: PathBuf,
+    /// The case file's canonical path, saved in each checkpoint.
+    case_source: String,
+    probe_header: Vec<String>,
+    midpoint: Option<MidpointParams>,
+    /// Whether the case has free bodies (one CSV each, and the fluid + bodies energy).
+    has_free: bool,
+    /// [`fluid_and_body_energy`] at the start.
+    fluid_body0: f64,
+    outputs: Outputs,
+    free_csv: Vec<Series>,
+    fluid_body_max: f64,
+    frames: Frames,
+    counters: RunCounters,
+    history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>,
+    probe_history: Vec<Vec<f64>>,
+    resumed_from_step: Option<u64>,
+    watch: Watch,
+    /// The last good state (at the last loop point) with its counters and history lengths.
+    good: SimState<V>,
+    good_counters: RunCounters,
+    good_rows: (usize, usize),
+    /// Checkpoints written by this invocation.
+    checkpoints: u64,
+    started: Instant,
+    /// Wall seconds of the earlier invocations of a resumed run.
+    wall_before: f64,
+    last_checkpoint: Instant,
+}
+
+impl<'a, V: CaseDim> ActiveRun<'a, V> {
+    /// Opens the outputs of the run of `loaded` into `out`, fresh or resumed from `resumed`
+    /// (restored into `sim`), and starts the clocks.
+    fn open(
+        loaded: &'a LoadedCase,
+        out: &'a Path,
+        sim: &mut Simulation<V>,
+        resumed: Option<Checkpoint<V>>,
+        checkpoint_path: PathBuf,
+    ) -> Result<Self, RunError> {
+        let mut probe_header = vec!["t".to_string()];
+        probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
+        let midpoint = match sim.config.integrator {
+            bisph_core::simulation::Integrator::Midpoint(p) => Some(p),
+            bisph_core::simulation::Integrator::Verlet => None,
         };
-        checkpoint::write(&checkpoint_path, &c)
-    };
-    loop {
+        let headers = series_headers(sim, &probe_header);
+        let has_free = sim
+            .walls
+            .bodies
+            .iter()
+            .any(|b| matches!(b.motion, Motion::Free(_)));
+        let free_csv_paths: Vec<PathBuf> = sim
+            .walls
+            .bodies
+            .iter()
+            .filter(|b| matches!(b.motion, Motion::Free(_)))
+            .map(|b| out.join(format!("body_{}.csv", b.name)))
+            .collect();
+        let fluid_body0 = fluid_and_body_energy(sim);
+        let start = start_run(
+            loaded,
+            out,
+            sim,
+            resumed,
+            &checkpoint_path,
+            &headers,
+            &free_csv_paths,
+        )?;
+        let case_source = std::fs::canonicalize(&loaded.source)
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|_| loaded.source.clone());
+        let watch = Watch::new(loaded.case.diagnostics.clone());
+        sim.timings = Default::default();
+        let started = Instant::now();
+        let wall_before = start.counters.wall_seconds;
+        let good_counters = start.counters.clone();
+        let good_rows = (start.history.len(), start.probe_history.len());
+        Ok(ActiveRun {
+            loaded,
+            out,
+            checkpoint_path,
+            case_source,
+            probe_header,
+            midpoint,
+            has_free,
+            fluid_body0,
+            outputs: start.outputs,
+            free_csv: start.free_csv,
+            fluid_body_max: start.fluid_body_max,
+            frames: start.frames,
+            counters: start.counters,
+            history: start.history,
+            probe_history: start.probe_history,
+            resumed_from_step: start.resumed_from_step,
+            watch,
+            good: SimState::default(),
+            good_counters,
+            good_rows,
+            checkpoints: 0,
+            started,
+            wall_before,
+            last_checkpoint: Instant::now(),
+        })
+    }
+
+    /// The time loop: outputs when due, checkpoints when due, one step at a time until the
+    /// end time, a stop signal or a tripped watch.
+    fn advance_to_end(
+        &mut self,
+        sim: &mut Simulation<V>,
+        options: &RunOptions,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<Ending, RunError> {
+        let case = &self.loaded.case;
+        let end = case.time.end;
+        // A resumed run wrote the outputs of its first loop point before the checkpoint.
+        let mut skip_outputs = self.resumed_from_step.is_some();
+        loop {
+            let t = sim.time;
+            let last = t >= end * (1.0 - 1e-12);
+            if !skip_outputs && (t >= self.counters.next_series || last) {
+                if let Some(d) = self.write_series(sim)? {
+                    return Ok(Ending::Tripped(d));
+                }
+            }
+            if !skip_outputs
+                && case.output.vtk_interval > 0.0
+                && (t >= self.counters.next_frame || last)
+            {
+                self.write_frame(sim)?;
+            }
+            skip_outputs = false;
+            progress(Progress {
+                time: t,
+                end,
+                step: sim.step,
+            });
+            if last {
+                return Ok(Ending::Reached);
+            }
+            self.mark_good(sim);
+            let signalled = options
+                .stop
+                .is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+            if self.checkpoint_due(sim.step, signalled, options)
+                && Some(sim.step) != self.resumed_from_step
+            {
+                self.write_checkpoint()?;
+                self.checkpoints += 1;
+                self.last_checkpoint = Instant::now();
+            }
+            if signalled {
+                return Ok(Ending::Interrupted);
+            }
+            if let Err(e) = sim.advance(Some(end)) {
+                return Ok(Ending::Tripped(from_sim_error(&e, sim)));
+            }
+            if let Some(d) = self.watch.check(sim, &self.good, self.counters.dt0) {
+                return Ok(Ending::Tripped(d));
+            }
+            self.record_step(sim)?;
+        }
+    }
+
+    /// Whether a checkpoint is due at step `step`: every `every_steps` steps, every
+    /// `every_minutes` of wall clock, or on a stop signal (options override the case).
+    fn checkpoint_due(&self, step: u64, signalled: bool, options: &RunOptions) -> bool {
+        let settings = &self.loaded.case.checkpoint;
+        let every_steps = options.checkpoint_steps.unwrap_or(settings.every_steps);
+        let every_seconds = 60.0 * options.checkpoint_minutes.unwrap_or(settings.every_minutes);
+        (every_steps > 0 && step > 0 && step.is_multiple_of(every_steps))
+            || (every_seconds > 0.0
+                && self.last_checkpoint.elapsed().as_secs_f64() >= every_seconds)
+            || (signalled && settings.on_signal)
+    }
+
+    /// One row of each CSV series at the current time (energy, flux forcing, forces, free
+    /// bodies, pistons, probes), then the next series time. Returns the diagnosis instead,
+    /// writing nothing, when the energy has grown past its watch.
+    fn write_series(&mut self, sim: &Simulation<V>) -> Result<Option<Diagnosis>, RunError> {
         let t = sim.time;
-        let last = t >= end * (1.0 - 1e-12);
-        if !skip_outputs && (t >= counters.next_series || last) {
-            let e = sim.energy();
-            if let Some(d) = energy_growth(
-                &watch.settings,
-                &sim,
-                e.total,
-                counters.e0_total,
-                counters.scale,
-            ) {
-                trip = Some(d);
-                break;
-            }
-            counters.max_drift = counters
-                .max_drift
-                .max((e.total - counters.e0_total).abs() / counters.scale);
-            counters.max_speed = counters.max_speed.max(sim.max_speed());
-            let row = [
+        let e = sim.energy();
+        let counters = &mut self.counters;
+        if let Some(d) = energy_growth(
+            &self.watch.settings,
+            sim,
+            e.total,
+            counters.e0_total,
+            counters.scale,
+        ) {
+            return Ok(Some(d));
+        }
+        counters.max_drift = counters
+            .max_drift
+            .max((e.total - counters.e0_total).abs() / counters.scale);
+        counters.max_speed = counters.max_speed.max(sim.max_speed());
+        let row = [
+            t,
+            e.kinetic,
+            e.compressible,
+            e.potential,
+            e.wall_work,
+            e.total,
+            e.viscous_dissipation,
+            e.forcing_work,
+        ];
+        if let Some(csv) = self.outputs.get(ENERGY) {
+            csv.row(&row)?;
+        }
+        self.write_flux_rows(sim)?;
+        self.history.push(row);
+        self.write_body_rows(sim)?;
+        let mut row = vec![t];
+        row.extend(sim.sample_probes());
+        if let Some(csv) = self.outputs.get(PROBES) {
+            csv.row(&row)?;
+        }
+        self.probe_history.push(row);
+        let interval = self.loaded.case.output.series_interval;
+        let counters = &mut self.counters;
+        counters.next_series = if interval > 0.0 {
+            counters.next_series + interval
+        } else {
+            t
+        };
+        while interval > 0.0 && counters.next_series <= t {
+            counters.next_series += interval;
+        }
+        Ok(None)
+    }
+
+    /// Flux forcing: the row of `flux.csv` and the driving force on the whole fluid,
+    /// `F sum_i m_i`, in `forces.csv`.
+    fn write_flux_rows(&mut self, sim: &Simulation<V>) -> Result<(), RunError> {
+        let Some(flux) = sim.config.flux else {
+            return Ok(());
+        };
+        let t = sim.time;
+        let bulk = sim.bulk_velocity();
+        let target = flux.target_velocity;
+        if let Some(csv) = self.outputs.get(FLUX) {
+            csv.row(&[
                 t,
-                e.kinetic,
-                e.compressible,
-                e.potential,
-                e.wall_work,
-                e.total,
-                e.viscous_dissipation,
-                e.forcing_work,
-            ];
-            if let Some(csv) = outputs.get(ENERGY) {
-                csv.row(&row)?;
+                bulk,
+                target,
+                sim.flux_history.force,
+                (bulk - target) / target,
+            ])?;
+        }
+        let total_mass: f64 = sim.fluid.mass.iter().sum();
+        let force = sim.body_force * total_mass;
+        let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
+        if V::DIM == 3 {
+            values.extend([0.0; 3]);
+        }
+        if let Some(csv) = self.outputs.get(FORCES) {
+            csv.named_row(t, "driving", &values)?;
+        }
+        Ok(())
+    }
+
+    /// The bodies' rows: loads in `forces.csv`, each free body's `body_<name>.csv` (and the
+    /// fluid + bodies energy drift), each piston's row in `bodies.csv`.
+    fn write_body_rows(&mut self, sim: &Simulation<V>) -> Result<(), RunError> {
+        let t = sim.time;
+        for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
+            let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
+            if V::DIM == 3 {
+                values.extend(V::angular_to_vec(moment));
             }
-            if let Some(flux) = sim.config.flux {
-                let bulk = sim.bulk_velocity();
-                let target = flux.target_velocity;
-                if let Some(csv) = outputs.get(FLUX) {
-                    csv.row(&[
-                        t,
-                        bulk,
-                        target,
-                        sim.flux_history.force,
-                        (bulk - target) / target,
-                    ])?;
-                }
-                // The driving force on the whole fluid, `F sum_i m_i`.
-                let total_mass: f64 = sim.fluid.mass.iter().sum();
-                let force = sim.body_force * total_mass;
-                let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
-                if V::DIM == 3 {
-                    values.extend([0.0; 3]);
-                }
-                if let Some(csv) = outputs.get(FORCES) {
-                    csv.named_row(t, "driving", &values)?;
-                }
-            }
-            history.push(row);
-            for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
-                let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
-                if V::DIM == 3 {
-                    values.extend(V::angular_to_vec(moment));
-                }
-                if let Some(csv) = outputs.get(FORCES) {
-                    csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
-                }
-            }
-            if has_free {
-                let loads = sim.walls.body_loads(t);
-                let mut k = 0;
-                for (b, body) in sim.walls.bodies.iter().enumerate() {
-                    if let Motion::Free(f) = &body.motion {
-                        let centre = body.centre + body.motion.kinematics(t).displacement;
-                        let row = crate::run::outputs::free_body_row::<V>(
-                            t, f, centre, loads[b].0, loads[b].1,
-                        );
-                        free_csv[k].row(&row)?;
-                        k += 1;
-                    }
-                }
-                fluid_body_max =
-                    fluid_body_max.max((body_energy(&sim) - fluid_body0).abs() / counters.scale);
-            }
-            if let Some(csv) = outputs.get(BODIES) {
-                for b in &sim.walls.bodies {
-                    if let Motion::Piston(p) = b.motion {
-                        let values = [
-                            p.position,
-                            p.velocity,
-                            p.kinetic_energy(),
-                            p.outside_force * p.position,
-                        ];
-                        csv.named_row(t, &b.name, &values)?;
-                    }
-                }
-            }
-            let mut row = vec![t];
-            row.extend(sim.sample_probes());
-            if let Some(csv) = outputs.get(PROBES) {
-                csv.row(&row)?;
-            }
-            probe_history.push(row);
-            counters.next_series = if case.output.series_interval > 0.0 {
-                counters.next_series + case.output.series_interval
-            } else {
-                t
-            };
-            while case.output.series_interval > 0.0 && counters.next_series <= t {
-                counters.next_series += case.output.series_interval;
+            if let Some(csv) = self.outputs.get(FORCES) {
+                csv.named_row(t, &sim.walls.bodies[b].name, &values)?;
             }
         }
-        if !skip_outputs && case.output.vtk_interval > 0.0 && (t >= counters.next_frame || last) {
-            frames.write(&sim)?;
-            while counters.next_frame <= t {
-                counters.next_frame += case.output.vtk_interval;
+        if self.has_free {
+            let loads = sim.walls.body_loads(t);
+            let mut k = 0;
+            for (b, body) in sim.walls.bodies.iter().enumerate() {
+                if let Motion::Free(f) = &body.motion {
+                    let centre = body.centre + body.motion.kinematics(t).displacement;
+                    let row = crate::run::outputs::free_body_row::<V>(
+                        t, f, centre, loads[b].0, loads[b].1,
+                    );
+                    self.free_csv[k].row(&row)?;
+                    k += 1;
+                }
+            }
+            self.fluid_body_max = self
+                .fluid_body_max
+                .max((fluid_and_body_energy(sim) - self.fluid_body0).abs() / self.counters.scale);
+        }
+        if let Some(csv) = self.outputs.get(BODIES) {
+            for b in &sim.walls.bodies {
+                if let Motion::Piston(p) = b.motion {
+                    let values = [
+                        p.position,
+                        p.velocity,
+                        p.kinetic_energy(),
+                        p.outside_force * p.position,
+                    ];
+                    csv.named_row(t, &b.name, &values)?;
+                }
             }
         }
-        skip_outputs = false;
-        progress(Progress {
-            time: t,
-            end,
-            step: sim.step,
-        });
-        if last {
-            break;
+        Ok(())
+    }
+
+    /// A VTK frame of the current state, then the next frame time.
+    fn write_frame(&mut self, sim: &Simulation<V>) -> Result<(), RunError> {
+        self.frames.write(sim)?;
+        while self.counters.next_frame <= sim.time {
+            self.counters.next_frame += self.loaded.case.output.vtk_interval;
         }
-        // The loop point: the state a checkpoint holds, and the last good state for the watches.
+        Ok(())
+    }
+
+    /// The loop point: brings the counters up to date (series lengths, frames, wall seconds)
+    /// and keeps the state as the one a checkpoint holds and the watches fall back to.
+    fn mark_good(&mut self, sim: &Simulation<V>) {
+        let counters = &mut self.counters;
         if counters.dt0 == 0.0 {
             counters.dt0 = sim.next_dt();
         }
-        counters.csv_lengths = outputs.lengths();
+        counters.csv_lengths = self.outputs.lengths();
         counters.body_csv_lengths.clear();
         counters
             .body_csv_lengths
-            .extend(free_csv.iter().map(|s| s.len()));
-        counters.fluid_body_max = fluid_body_max;
+            .extend(self.free_csv.iter().map(|s| s.len()));
+        counters.fluid_body_max = self.fluid_body_max;
         counters.frame_times.clear();
-        counters.frame_times.extend_from_slice(frames.times());
-        counters.wall_seconds = wall_before + started.elapsed().as_secs_f64();
-        good.capture(&sim);
-        good_counters.clone_from(&counters);
-        good_rows = (history.len(), probe_history.len());
-        let signalled = options
-            .stop
-            .is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
-        let due = (every_steps > 0 && sim.step > 0 && sim.step.is_multiple_of(every_steps))
-            || (every_seconds > 0.0 && last_checkpoint.elapsed().as_secs_f64() >= every_seconds)
-            || (signalled && case.checkpoint.on_signal);
-        if due && Some(sim.step) != resumed_from_step {
-            write_checkpoint(&good, &counters, &history, &probe_history)?;
-            checkpoints += 1;
-            last_checkpoint = Instant::now();
-        }
-        if signalled {
-            interrupted = true;
-            break;
-        }
-        if let Err(e) = sim.advance(Some(end)) {
-            trip = Some(from_sim_error(&e, &sim));
-            break;
-        }
-        if let Some(d) = watch.check(&sim, &good, counters.dt0) {
-            trip = Some(d);
-            break;
-        }
+        counters.frame_times.extend_from_slice(self.frames.times());
+        counters.wall_seconds = self.wall_before + self.started.elapsed().as_secs_f64();
+        self.good.capture(sim);
+        self.good_counters.clone_from(&self.counters);
+        self.good_rows = (self.history.len(), self.probe_history.len());
+    }
+
+    /// Writes the last good state with the counters and histories as the checkpoint.
+    fn write_checkpoint(&self) -> Result<(), OutputError> {
+        let c = Checkpoint {
+            case_source: self.case_source.clone(),
+            case_text: self.loaded.text.clone(),
+            sim: self.good.clone(),
+            run: self.counters.clone(),
+            history: self.history.clone(),
+            probe_history: self.probe_history.clone(),
+        };
+        checkpoint::write(&self.checkpoint_path, &c)
+    }
+
+    /// After a step: the midpoint iteration counters and the row of `midpoint.csv`.
+    fn record_step(&mut self, sim: &Simulation<V>) -> Result<(), RunError> {
+        let counters = &mut self.counters;
         counters.iterations_sum += sim.last_iterations as u64;
         counters.iterations_max = counters.iterations_max.max(sim.last_iterations);
         counters.residue_max = counters.residue_max.max(sim.last_residue);
-        if let (Some(csv), Some(p)) = (outputs.get(MIDPOINT), midpoint) {
+        if let (Some(csv), Some(p)) = (self.outputs.get(MIDPOINT), self.midpoint) {
             csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
             if sim.last_residue >= p.tolerance {
-                counters.unconverged += 1;
+                self.counters.unconverged += 1;
             }
         }
+        Ok(())
     }
-    if let Some(d) = trip.as_mut() {
-        // Back to the last good state: checkpoint it, write it as a VTK frame, report.
-        good.restore(&mut sim)
+
+    /// After a tripped watch: back to the last good state, which is checkpointed and written
+    /// as a VTK frame, and `diagnostics.json` reporting `d` with where to find them.
+    fn fall_back(&mut self, sim: &mut Simulation<V>, d: &mut Diagnosis) -> Result<(), RunError> {
+        self.good
+            .restore(sim)
             .map_err(|reason| CheckpointError::Mismatch {
-                path: checkpoint_path.clone(),
+                path: self.checkpoint_path.clone(),
                 reason,
             })?;
-        history.truncate(good_rows.0);
-        probe_history.truncate(good_rows.1);
-        counters.clone_from(&good_counters);
-        write_checkpoint(&good, &counters, &history, &probe_history)?;
-        checkpoints += 1;
-        frames.write(&sim)?;
-        d.last_good_step = good.step;
-        d.last_good_time = good.time;
+        self.history.truncate(self.good_rows.0);
+        self.probe_history.truncate(self.good_rows.1);
+        self.counters.clone_from(&self.good_counters);
+        self.write_checkpoint()?;
+        self.checkpoints += 1;
+        self.frames.write(sim)?;
+        d.last_good_step = self.good.step;
+        d.last_good_time = self.good.time;
         d.checkpoint = Some(checkpoint::FILE_NAME.to_string());
-        d.vtk_frame = frames.last_fluid_file();
+        d.vtk_frame = self.frames.last_fluid_file();
         let json = serde_json::to_string_pretty(&*d).unwrap_or_default();
-        write_atomic(&out.join("diagnostics.json"), json.as_bytes())?;
+        write_atomic(&self.out.join("diagnostics.json"), json.as_bytes())?;
+        Ok(())
     }
-    let wall_seconds = wall_before + started.elapsed().as_secs_f64();
-    let e_final = sim.energy();
-    let summary = Summary {
-        case: case.name.clone(),
-        dim: V::DIM,
-        fluid_particles: sim.fluid.len(),
-        boundary_elements: sim.walls.elements.len(),
-        steps: sim.step,
-        time: sim.time,
-        wall_seconds,
-        particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
-            / wall_seconds.max(1e-9),
-        phase_seconds: PhaseSeconds::new(&sim.timings, started.elapsed().as_secs_f64()),
-        energy_drift_relative: (e_final.total - counters.e0_total) / counters.scale,
-        energy_scale: counters.scale,
-        energy_total_initial: counters.e0_total,
-        energy_total_final: e_final.total,
-        energy_drift_max_relative: counters.max_drift,
-        max_speed_final: sim.max_speed(),
-        max_speed_max: counters.max_speed,
-        iterations_mean: counters.iterations_sum as f64 / sim.step.max(1) as f64,
-        iterations_max: counters.iterations_max,
-        residue_max: counters.residue_max,
-        unconverged_steps: counters.unconverged,
-        threads: rayon::current_num_threads(),
-        frames: frames.count(),
-        checkpoints,
-        resumed_from_step,
-        fluid_body_energy_drift_max_relative: has_free.then_some(fluid_body_max),
-        fluid_body_energy_drift_relative: has_free
-            .then(|| (body_energy(&sim) - fluid_body0) / counters.scale),
-        particles_behind_walls: sim
-            .walls
-            .count_behind(&sim.fluid.position, sim.config.kernel.support),
-        settling,
-        stopped: match (&trip, interrupted) {
-            (Some(d), _) => Some(d.to_string()),
-            (None, true) => Some("interrupted by a signal; resume with --resume".into()),
-            _ => None,
-        },
-    };
-    let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    write_atomic(&out.join("summary.json"), json.as_bytes())?;
-    if let Some(d) = trip {
-        return Err(RunError::Stopped(Box::new(d)));
+
+    /// Ends the run: falls back on a trip, writes `summary.json`, and then either returns the
+    /// stop as an error or writes the plots and removes the now stale checkpoint.
+    fn finish(
+        mut self,
+        sim: &mut Simulation<V>,
+        settling: Option<SettlingSummary>,
+        mut ending: Ending,
+    ) -> Result<Summary, RunError> {
+        if let Ending::Tripped(d) = &mut ending {
+            self.fall_back(sim, d)?;
+        }
+        let summary = self.summary(sim, settling, &ending);
+        let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        write_atomic(&self.out.join("summary.json"), json.as_bytes())?;
+        match ending {
+            Ending::Tripped(d) => return Err(RunError::Stopped(Box::new(d))),
+            Ending::Interrupted => {
+                return Err(RunError::Interrupted {
+                    step: sim.step,
+                    time: sim.time,
+                    checkpoint: self.checkpoint_path,
+                })
+            }
+            Ending::Reached => {}
+        }
+        if self.loaded.case.output.plots {
+            write_plots(
+                self.out,
+                &self.history,
+                &self.probe_header,
+                &self.probe_history,
+            )?;
+        }
+        if self.checkpoint_path.exists() {
+            at(
+                &self.checkpoint_path,
+                std::fs::remove_file(&self.checkpoint_path),
+            )?;
+        }
+        Ok(summary)
     }
-    if interrupted {
-        return Err(RunError::Interrupted {
-            step: sim.step,
+
+    /// `summary.json` of the run as it ended.
+    fn summary(
+        &self,
+        sim: &Simulation<V>,
+        settling: Option<SettlingSummary>,
+        ending: &Ending,
+    ) -> Summary {
+        let counters = &self.counters;
+        let wall_seconds = self.wall_before + self.started.elapsed().as_secs_f64();
+        let e_final = sim.energy();
+        Summary {
+            case: self.loaded.case.name.clone(),
+            dim: V::DIM,
+            fluid_particles: sim.fluid.len(),
+            boundary_elements: sim.walls.elements.len(),
+            steps: sim.step,
             time: sim.time,
-            checkpoint: checkpoint_path,
-        });
+            wall_seconds,
+            particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
+                / wall_seconds.max(1e-9),
+            phase_seconds: PhaseSeconds::new(&sim.timings, self.started.elapsed().as_secs_f64()),
+            energy_drift_relative: (e_final.total - counters.e0_total) / counters.scale,
+            energy_scale: counters.scale,
+            energy_total_initial: counters.e0_total,
+            energy_total_final: e_final.total,
+            energy_drift_max_relative: counters.max_drift,
+            max_speed_final: sim.max_speed(),
+            max_speed_max: counters.max_speed,
+            iterations_mean: counters.iterations_sum as f64 / sim.step.max(1) as f64,
+            iterations_max: counters.iterations_max,
+            residue_max: counters.residue_max,
+            unconverged_steps: counters.unconverged,
+            threads: rayon::current_num_threads(),
+            frames: self.frames.count(),
+            checkpoints: self.checkpoints,
+            resumed_from_step: self.resumed_from_step,
+            fluid_body_energy_drift_max_relative: self.has_free.then_some(self.fluid_body_max),
+            fluid_body_energy_drift_relative: self
+                .has_free
+                .then(|| (fluid_and_body_energy(sim) - self.fluid_body0) / counters.scale),
+            particles_behind_walls: sim
+                .walls
+                .count_behind(&sim.fluid.position, sim.config.kernel.support),
+            settling,
+            stopped: match ending {
+                Ending::Tripped(d) => Some(d.to_string()),
+                Ending::Interrupted => Some("interrupted by a signal; resume with --resume".into()),
+                Ending::Reached => None,
+            },
+        }
     }
-    if case.output.plots {
-        write_plots(out, &history, &probe_header, &probe_history)?;
-    }
-    // The run is complete: its checkpoint is stale.
-    if checkpoint_path.exists() {
-        at(&checkpoint_path, std::fs::remove_file(&checkpoint_path))?;
-    }
-    Ok(summary)
 }
 
+/// Writes `energy.png` from the energy `history` and, when there are probes, `probes.png`.
 fn write_plots(
     out: &Path,
     history: &[[f64; 8]],
