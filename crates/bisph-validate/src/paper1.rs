@@ -566,6 +566,7 @@ impl ValidationCase for LobovskyDamBreak {
                     "bi-no-diffusion",
                     &[
                         "boundary=bi",
+                        "boundary_quadrature=centre",
                         "shepard=discrete",
                         "fluid.delta=0",
                         "fluid.artificial_viscosity=0",
@@ -576,6 +577,7 @@ impl ValidationCase for LobovskyDamBreak {
                     "bi-delta",
                     &[
                         "boundary=bi",
+                        "boundary_quadrature=centre",
                         "shepard=discrete",
                         "fluid.delta=0.1",
                         "fluid.artificial_viscosity=0",

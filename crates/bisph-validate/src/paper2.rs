@@ -409,6 +409,7 @@ name = "hydrostatic-shepard"
 dim = 2
 boundary = "bi"
 shepard = "geometric"
+boundary_quadrature = "centre"
 [fluid]
 density = 998.0
 sound_speed = 9.5

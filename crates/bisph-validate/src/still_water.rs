@@ -44,8 +44,7 @@ const USAW: Model = Model {
 const ENERGY_WALL_PRESSURE: &str = "the energy walls' wall pressure (paper 1, eq 71) weighs half a kernel of a pressure that grows away from the wall, so it overestimates the load on a bottom by an amount that falls with dx";
 const ENERGY_LIMITATION: &str = "the energy-conserving walls are zeroth-order consistent (paper 1): within a kernel support of a wall that is not horizontal the model has no static rest state (the fluid sum gives only the part gamma of the vertical pressure gradient, docs/design.md), so a slow flow stays along the sloped and side walls; and the wall pressure of eq 71 overestimates the bottom load at this resolution";
 const USAW_LIMITATION: &str = "the start that fits the semi-analytical walls (fill = \"usaw\") pushes the particles in the acute corner where the sloped side meets the free surface through the sloped wall";
-const CORNER_LIMITATION: &str = "the bi boundary term sums W at element centres over elements one dx long; at the convex corner of the step that quadrature leaves a force no rest state balances, and a slow flow stays there (with elements dx/2 long the tank holds: resolution.element_over_dx = 0.5)";
-const COARSE_3D_LIMITATION: &str = "the bi boundary term sums W at element centres over elements dx x dx; along the side walls and edges that quadrature leaves a slow flow (with elements dx/2 wide the tank holds: resolution.element_over_dx = 0.5)";
+const COARSE_3D_LIMITATION: &str = "in 3-D the bi boundary term integrates the kernel at element centres by default (boundary_quadrature = \"centre\"), and over elements dx x dx that quadrature leaves a slow flow along the side walls and edges; boundary_quadrature = \"exact\" holds the tank, at several times the cost";
 
 /// One tank and the models it is run with, with the bars each model is known not to meet yet
 /// (by check key: `end`, `speed`, `growth`, `bottom`, `behind`) and why.
@@ -84,7 +83,7 @@ const TANKS: [Tank; 3] = [
         bottom: [0.15, 0.0, 0.0],
         models: &[
             (ENERGY, &["speed", "bottom"], ENERGY_LIMITATION),
-            (BI, &["speed", "growth"], CORNER_LIMITATION),
+            (BI, &[], ""),
             (USAW, &["end", "speed", "growth", "bottom"], USAW_LIMITATION),
         ],
     },

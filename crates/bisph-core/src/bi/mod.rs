@@ -129,6 +129,19 @@ pub fn outline_shepard<V: Vector>(kernel: &Wendland, x: V, outline: &[V], normal
     }
 }
 
+/// [`ElementIntegrals::kernel_integral`] for any vector type.
+#[inline(always)]
+pub fn kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V], radius: f64) -> f64 {
+    match (
+        V::as_concrete(std::slice::from_ref(&x)),
+        V::as_concrete(corners),
+    ) {
+        (Concrete::Two(x), Concrete::Two(c)) => DVec2::kernel_integral(kernel, x[0], c, radius),
+        (Concrete::Three(x), Concrete::Three(c)) => DVec3::kernel_integral(kernel, x[0], c, radius),
+        _ => unreachable!("a point and its element's corners share one vector type"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,7 +4,7 @@
 use crate::dim::Vector;
 use crate::walls::energy_bi::{EnergyConservingWalls, ListedEnergyWalls};
 use crate::walls::shepard::{Shepard, ShepardKind};
-use crate::walls::shepard_bi::ShepardWalls;
+use crate::walls::shepard_bi::{BoundaryQuadrature, ShepardWalls};
 use crate::walls::usaw::{UsawWalls, Vertices, WallInterpolation};
 use crate::walls::WallModel;
 
@@ -14,8 +14,9 @@ pub enum WallModelChoice {
     /// Energy-conserving boundary integrals (paper 1). The default.
     #[default]
     Energy,
-    /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25).
-    ShepardBi(ShepardKind),
+    /// Classic boundary integrals with Shepard renormalisation (paper 1, eqs 24-25), and how
+    /// their boundary term integrates the kernel over an element.
+    ShepardBi(ShepardKind, BoundaryQuadrature),
     /// Unified semi-analytical walls with vertex particles (paper 3), 2-D.
     Usaw(UsawParams),
 }
@@ -27,7 +28,7 @@ impl WallModelChoice {
     pub fn shepard(&self) -> Option<Shepard> {
         match self {
             WallModelChoice::Energy => None,
-            WallModelChoice::ShepardBi(kind) => Some(Shepard::of(*kind)),
+            WallModelChoice::ShepardBi(kind, _) => Some(Shepard::of(*kind)),
             WallModelChoice::Usaw(p) => Some(Shepard {
                 kind: if p.geometric_gamma {
                     ShepardKind::Geometric
@@ -102,9 +103,10 @@ impl WallModelChoice {
                 Some(listed) => task.run(&listed),
                 None => task.run(&EnergyConservingWalls),
             },
-            WallModelChoice::ShepardBi(kind) => task.run(&ShepardWalls {
+            WallModelChoice::ShepardBi(kind, quadrature) => task.run(&ShepardWalls {
                 gravity: inputs.gravity,
                 shepard: Shepard::of(kind),
+                quadrature,
             }),
             WallModelChoice::Usaw(params) => task.run(&UsawWalls {
                 vertices: inputs.vertices,

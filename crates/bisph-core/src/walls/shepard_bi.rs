@@ -17,6 +17,21 @@ use crate::neighbours::CellGrid;
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
+/// How the boundary term `sum_k (p_k + p_i) n_k int_{S_k} W dS` integrates the kernel over
+/// each element.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BoundaryQuadrature {
+    /// `W(|c_k - x_i|) s_k`: the kernel at the element centre times its area (paper 1,
+    /// eqs 24-25).
+    #[default]
+    Centre,
+    /// `int_{S_k} W dS` exactly, the integral whose sum over the walls is `-grad gamma` of
+    /// the geometric Shepard factor (paper 3, eq 9; paper 4, eq 3), so that a constant
+    /// pressure meets walls that cut the kernel support, corners included, without a
+    /// quadrature error.
+    Exact,
+}
+
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShepardWalls<V> {
@@ -24,6 +39,8 @@ pub struct ShepardWalls<V> {
     pub gravity: V,
     /// Which Shepard factor renormalises the operators.
     pub shepard: Shepard,
+    /// How the boundary term integrates the kernel over an element.
+    pub quadrature: BoundaryQuadrature,
 }
 
 impl<V: Vector> WallModel<V> for ShepardWalls<V> {
@@ -91,8 +108,24 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         let (x, u, p) = (a.x, a.u, a.p);
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
-        grid.for_each_sparse_neighbour(x, &elements.centre, kernel.support, |k, _, r| {
-            let ws = kernel.value(r) * elements.area[k];
+        let radius = match self.quadrature {
+            BoundaryQuadrature::Centre => kernel.support,
+            BoundaryQuadrature::Exact => kernel.support + elements.max_reach,
+        };
+        grid.for_each_sparse_neighbour(x, &elements.centre, radius, |k, _, r| {
+            let ws = match self.quadrature {
+                BoundaryQuadrature::Centre => kernel.value(r) * elements.area[k],
+                BoundaryQuadrature::Exact => {
+                    let corners =
+                        elements.corner_start[k] as usize..elements.corner_start[k + 1] as usize;
+                    crate::bi::kernel_integral(
+                        kernel,
+                        x,
+                        &elements.corners[corners],
+                        kernel.support,
+                    )
+                }
+            };
             let n = elements.normal[k];
             pressure_gradient += n * ((elements.pressure[k] + p) * ws);
             velocity_divergence += (elements.velocity[k] - u).dot(n) * ws;

@@ -13,7 +13,7 @@ use bisph_core::geometry::ElementShape;
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
-use bisph_core::walls::shepard_bi::ShepardKind;
+use bisph_core::walls::shepard_bi::{BoundaryQuadrature, ShepardKind};
 use bisph_core::walls::usaw::WallInterpolation;
 use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
@@ -353,13 +353,19 @@ pub fn build_simulation_with_layout<V: CaseDim>(
         domain_max,
         wall_model: match case.boundary {
             crate::case::schema::BoundaryName::Energy => WallModelChoice::Energy,
-            crate::case::schema::BoundaryName::Bi => {
-                WallModelChoice::ShepardBi(match case.shepard {
+            crate::case::schema::BoundaryName::Bi => WallModelChoice::ShepardBi(
+                match case.shepard {
                     crate::case::schema::ShepardName::Discrete => ShepardKind::Discrete,
                     crate::case::schema::ShepardName::Geometric => ShepardKind::Geometric,
                     crate::case::schema::ShepardName::Integrated => ShepardKind::Integrated,
-                })
-            }
+                },
+                match case.boundary_quadrature() {
+                    crate::case::schema::BoundaryQuadratureName::Centre => {
+                        BoundaryQuadrature::Centre
+                    }
+                    crate::case::schema::BoundaryQuadratureName::Exact => BoundaryQuadrature::Exact,
+                },
+            ),
             crate::case::schema::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
                 interpolation: match case.usaw.wall_interpolation {
                     crate::case::schema::WallInterpolationName::Shepard => {

@@ -191,6 +191,16 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("\"usaw\" walls are 2-D only, found dim = {}", c.dim),
         );
     }
+    if c.boundary_quadrature.is_some() && c.boundary != BoundaryName::Bi {
+        return e(
+            "boundary_quadrature",
+            format!(
+                "applies to boundary = \"bi\" only, found boundary = {:?}",
+                c.boundary
+            )
+            .to_lowercase(),
+        );
+    }
     if c.shepard == ShepardName::Integrated && c.dim != 2 {
         return e(
             "shepard",

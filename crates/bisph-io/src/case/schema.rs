@@ -15,6 +15,16 @@ pub enum EosName {
     Tait,
 }
 
+/// How the `bi` boundary term integrates the kernel over an element (`boundary_quadrature`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryQuadratureName {
+    /// `W` at the element centre times its area (paper 1, eqs 24-25).
+    Centre,
+    /// `int_S W dS` exactly (paper 3, eq 9; paper 4, eq 3).
+    Exact,
+}
+
 /// Wall model name.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
@@ -195,6 +205,16 @@ impl Case {
         self.fluid
             .artificial_viscosity
             .unwrap_or(DEFAULT_ARTIFICIAL_VISCOSITY)
+    }
+
+    /// The `bi` boundary quadrature in force: `boundary_quadrature`, or exact in 2-D (closed
+    /// form per segment) and at the element centre in 3-D.
+    pub fn boundary_quadrature(&self) -> BoundaryQuadratureName {
+        self.boundary_quadrature.unwrap_or(if self.dim == 2 {
+            BoundaryQuadratureName::Exact
+        } else {
+            BoundaryQuadratureName::Centre
+        })
     }
 
     /// The equation of state in force: `fluid.eos`, or the wall model's (Tait for `usaw`).
@@ -938,6 +958,11 @@ pub struct Case {
     /// `"integrated"`.
     #[serde(default)]
     pub shepard: ShepardName,
+    /// How the `bi` walls' boundary term integrates the kernel over an element: `"exact"`
+    /// (default in 2-D) or `"centre"` (the kernel at the element centre times its area;
+    /// default in 3-D, where the exact polygon integrals cost several times the sweep)
+    /// ([`Case::boundary_quadrature`]).
+    pub boundary_quadrature: Option<BoundaryQuadratureName>,
     /// Options of the semi-analytical walls (`boundary = "usaw"`).
     #[serde(default)]
     pub usaw: UsawSection,
