@@ -399,7 +399,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             ));
         }
     }
-    let selected: Vec<_> = cases
+    let selected: Vec<&dyn bisph_validate::ValidationCase> = cases
         .iter()
         .filter(|c| {
             if args.names.is_empty() && args.quick && !c.in_quick_suite() {
@@ -412,6 +412,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             }
             args.names.is_empty() || args.names.iter().any(|n| n == c.name())
         })
+        .map(|c| c.as_ref())
         .collect();
     check_validation_data(&selected)?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
@@ -466,7 +467,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
 /// Reads the experiment data of every selected case before any of them runs: exit code 1
 /// naming each case whose data are missing or unreadable.
 fn check_validation_data(
-    cases: &[&Box<dyn bisph_validate::ValidationCase>],
+    cases: &[&dyn bisph_validate::ValidationCase],
 ) -> Result<(), (u8, String)> {
     let problems: Vec<String> = cases
         .iter()

@@ -986,6 +986,17 @@ fn check_walls_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// The first periodic axis (`"x"`, `"y"` or `"z"`) along which gravity has a component: a
+/// hydrostatic pressure along it cannot be periodic.
+pub(crate) fn gravity_along_periodic_axis(c: &Case) -> Option<&'static str> {
+    c.domain
+        .as_ref()?
+        .periodic_axes()
+        .into_iter()
+        .find(|&a| c.fluid.gravity.get(a).is_some_and(|&g| g != 0.0))
+        .map(|a| ["x", "y", "z"][a])
+}
+
 #[cfg(test)]
 mod tests {
     use crate::case::load::parse_case;
@@ -1001,15 +1012,4 @@ mod tests {
         let err = err.to_string();
         assert!(err.contains("fluid_block[0].fill"), "{err}");
     }
-}
-
-/// The first periodic axis (`"x"`, `"y"` or `"z"`) along which gravity has a component: a
-/// hydrostatic pressure along it cannot be periodic.
-pub(crate) fn gravity_along_periodic_axis(c: &Case) -> Option<&'static str> {
-    c.domain
-        .as_ref()?
-        .periodic_axes()
-        .into_iter()
-        .find(|&a| c.fluid.gravity.get(a).is_some_and(|&g| g != 0.0))
-        .map(|a| ["x", "y", "z"][a])
 }
