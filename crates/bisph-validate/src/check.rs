@@ -120,6 +120,11 @@ pub trait ValidationCase: Sync {
     fn name(&self) -> &'static str;
     /// One line saying what it checks.
     fn description(&self) -> &'static str;
+    /// Finds and reads the experiment data the case compares with, so that missing or
+    /// unreadable data are reported before any simulation starts (none by default).
+    fn check_data(&self) -> Result<(), String> {
+        Ok(())
+    }
     /// Runs the case (quick or full resolution) writing its outputs under `out`.
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String>;
     /// `false` for cases too expensive for `--quick` runs of the whole registry (CI): they run

@@ -12,6 +12,7 @@
 
 pub mod apollo;
 pub mod check;
+pub mod data;
 pub mod packing;
 pub mod paper1;
 pub mod paper2;

@@ -371,7 +371,7 @@ fn mean_piston_force(bodies: &[String], fx: &[f64]) -> f64 {
 pub struct LobovskyDamBreak;
 
 /// Lobovsky et al. 2014, Table 2 (H = 300 mm, 100 runs): first-impact peak pressure of
-/// S1-S4 as `(median, 2.5 %, 97.5 %)` in mbar (see `shared/data/lobovsky-dambreak/PROVENANCE.md`).
+/// S1-S4 as `(median, 2.5 %, 97.5 %)` in mbar (see `data/README.md`).
 const LOBOVSKY_PEAKS_MBAR: [(f64, f64, f64); 4] = [
     (91.44, 75.06, 130.98),
     (57.49, 53.26, 63.31),
@@ -435,7 +435,39 @@ impl LobovskyDamBreak {
     }
 }
 
+/// Lobovsky et al. 2014, S2 at H = 300 mm: `t*` and the 2.5 %, median and 97.5 % of `p*` over
+/// the repeated runs, in the data folder (`data/README.md`).
+pub const LOBOVSKY_S2_FILE: &str = "lobovsky-dam-break/lobovsky2014-s2-percentiles.csv";
+
+/// The columns of [`LOBOVSKY_S2_FILE`]: `t*`, `p*` 2.5 %, median and 97.5 %.
+pub fn lobovsky_s2_percentiles() -> Result<[Vec<f64>; 4], String> {
+    let path = crate::data::find(LOBOVSKY_S2_FILE)?;
+    let (_, rows) = read_columns(&path)?;
+    let mut columns: [Vec<f64>; 4] = Default::default();
+    for (k, row) in rows.iter().enumerate() {
+        let values: Option<Vec<f64>> = row.iter().map(|v| v.parse().ok()).collect();
+        match values {
+            Some(v) if v.len() == 4 => columns.iter_mut().zip(v).for_each(|(c, v)| c.push(v)),
+            _ => {
+                return Err(format!(
+                    "{}: line {}: expected 4 numbers, found `{}`",
+                    path.display(),
+                    k + 2,
+                    row.join(",")
+                ))
+            }
+        }
+    }
+    if columns[0].is_empty() {
+        return Err(format!("{}: no data rows", path.display()));
+    }
+    Ok(columns)
+}
+
 impl ValidationCase for LobovskyDamBreak {
+    fn check_data(&self) -> Result<(), String> {
+        lobovsky_s2_percentiles().map(|_| ())
+    }
     fn name(&self) -> &'static str {
         "lobovsky-dam-break"
     }
@@ -517,8 +549,6 @@ impl ValidationCase for LobovskyDamBreak {
                 }
             }
             // S2 against the percentile time series.
-            let (eh, erows) = read_columns(Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data/lobovsky-dambreak/aquagpusph/Fig31_Wemmenhove_sensor2_compared_graph.csv")))
-                .unwrap_or_default();
             let mut series = vec![line(
                 "bisph S2",
                 pt.iter().map(|t| t * (9.81f64 / 0.3).sqrt()).collect(),
@@ -527,22 +557,13 @@ impl ValidationCase for LobovskyDamBreak {
                     .map(|p| p / scale)
                     .collect(),
             )];
-            if erows.len() > 10 {
-                let col = |k: usize| {
-                    erows
-                        .iter()
-                        .filter_map(|r| r.get(k)?.parse::<f64>().ok())
-                        .collect::<Vec<f64>>()
-                };
-                let te = col(0);
-                for (k, label) in [
-                    (1, "experiment 2.5%"),
-                    (2, "experiment median"),
-                    (3, "experiment 97.5%"),
-                ] {
-                    series.push(line(label, te.clone(), col(k)));
-                }
-                let _ = eh;
+            let [te, lo, median, hi] = lobovsky_s2_percentiles()?;
+            for (label, values) in [
+                ("experiment 2.5%", lo),
+                ("experiment median", median),
+                ("experiment 97.5%", hi),
+            ] {
+                series.push(line(label, te.clone(), values));
             }
             plots.push(plot(
                 &dir,

@@ -5,34 +5,76 @@ use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use crate::support::{column, line, load, plot, read_columns, run};
 use std::path::Path;
 
-/// The experiment file (see `shared/data/spheric-test2-kleefsman/PROVENANCE.md`).
-const DATA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/data/spheric-test2-kleefsman/test_case_2_exp_data.dat"
-);
+/// The experiment file in the data folder: time, P1, H2 and H4 of the MARIN experiment
+/// (`data/README.md`).
+pub const DATA_FILE: &str = "spheric-test2/kleefsman2005-p1-h2-h4.dat";
 
-/// Experiment columns `t, P1..P8, H1..H4`, with the file's H1 and H3 columns swapped back
-/// to the official probe positions (PROVENANCE.md: the column headed H1 is the probe at
-/// x = 1.488 m).
-pub fn experiment() -> Result<Vec<[f64; 13]>, String> {
-    let text = std::fs::read_to_string(DATA).map_err(|e| format!("cannot read {DATA}: {e}"))?;
-    let mut rows = Vec::new();
-    for l in text.lines().skip(1) {
-        let v: Vec<f64> = l
+/// The experiment series the case compares with.
+pub struct Experiment {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Pressure P1 [Pa].
+    pub p1: Vec<f64>,
+    /// Water height H2 (x = 0.992 m) [m].
+    pub h2: Vec<f64>,
+    /// Water height H4 (x = 2.638 m) [m].
+    pub h4: Vec<f64>,
+}
+
+/// Reads the experiment file found in the data folder.
+pub fn experiment() -> Result<Experiment, String> {
+    let path = crate::data::find(DATA_FILE)?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    parse_experiment(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Parses whitespace-separated columns under a header of names with units in brackets
+/// (`Time (s) P1 (Pa) ... H2 (m) ... H4 (m)`), so that the official file with all its columns
+/// reads as well. Only H2 and H4 are taken of the heights: they are the same in every copy of
+/// the file (the official file's H1 and H3 columns are swapped).
+fn parse_experiment(text: &str) -> Result<Experiment, String> {
+    let mut lines = text.lines();
+    let names: Vec<&str> = lines
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .filter(|w| !w.starts_with('('))
+        .collect();
+    let index = |name: &str| {
+        names
+            .iter()
+            .position(|n| *n == name)
+            .ok_or_else(|| format!("line 1: no column `{name}` in the header"))
+    };
+    let columns = [index("Time")?, index("P1")?, index("H2")?, index("H4")?];
+    let mut series: [Vec<f64>; 4] = Default::default();
+    for (k, line) in lines.enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let values: Vec<f64> = line
             .split_whitespace()
-            .filter_map(|w| w.parse().ok())
-            .collect();
-        if v.len() == 13 {
-            let mut r = [0.0; 13];
-            r.copy_from_slice(&v);
-            r.swap(9, 11);
-            rows.push(r);
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("line {}: expected numbers, found `{line}`", k + 2))?;
+        if values.len() != names.len() {
+            return Err(format!(
+                "line {}: expected {} values, found {}",
+                k + 2,
+                names.len(),
+                values.len()
+            ));
+        }
+        for (s, &c) in series.iter_mut().zip(&columns) {
+            s.push(values[c]);
         }
     }
-    if rows.is_empty() {
-        return Err(format!("{DATA}: no data rows"));
+    if series[0].is_empty() {
+        return Err("no data rows".into());
     }
-    Ok(rows)
+    let [t, p1, h2, h4] = series;
+    Ok(Experiment { t, p1, h2, h4 })
 }
 
 /// First time `p` rises above `threshold` (linear interpolation), NaN if never.
@@ -88,6 +130,9 @@ impl ValidationCase for SphericTest2 {
     fn description(&self) -> &'static str {
         "paper 2, 3.2: SPHERIC test 2 3-D dam break on a box; front arrival at P1, P1 first peak, heights H2 and H4 against the MARIN experiment"
     }
+    fn check_data(&self) -> Result<(), String> {
+        experiment().map(|_| ())
+    }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
         // Quick: dx = 0.55/8 with the energy-conserving walls (the geometric Shepard factor
         // costs about 9x more per step on this scale); full: the case file
@@ -115,11 +160,12 @@ impl ValidationCase for SphericTest2 {
         let p1 = column(&h, &rows, "P1")?;
         let h2 = column(&h, &rows, "H2")?;
         let h4 = column(&h, &rows, "H4")?;
-        let exp = experiment()?;
-        let te: Vec<f64> = exp.iter().map(|r| r[0]).collect();
-        let ep1: Vec<f64> = exp.iter().map(|r| r[1]).collect();
-        let eh2: Vec<f64> = exp.iter().map(|r| r[10]).collect();
-        let eh4: Vec<f64> = exp.iter().map(|r| r[12]).collect();
+        let Experiment {
+            t: te,
+            p1: ep1,
+            h2: eh2,
+            h4: eh4,
+        } = experiment()?;
         let arrival_sim = arrival(&t, &p1, ARRIVAL_PA);
         let arrival_exp = arrival(&te, &ep1, ARRIVAL_PA);
         // First impact: the largest P1 within FIRST_IMPACT_S of the front's arrival.

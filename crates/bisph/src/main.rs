@@ -399,22 +399,28 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             ));
         }
     }
+    let selected: Vec<&dyn bisph_validate::ValidationCase> = cases
+        .iter()
+        .filter(|c| {
+            if args.names.is_empty() && args.quick && !c.in_quick_suite() {
+                eprintln!(
+                    "skipping {} in --quick (full only; `bisph validate --quick {}` runs its reduced variant)",
+                    c.name(),
+                    c.name()
+                );
+                return false;
+            }
+            args.names.is_empty() || args.names.iter().any(|n| n == c.name())
+        })
+        .map(|c| c.as_ref())
+        .collect();
+    check_validation_data(&selected)?;
     let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
     std::fs::create_dir_all(&out)
         .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
     let mut reports = Vec::new();
     let mut failed = Vec::new();
-    for case in cases.iter().filter(|c| {
-        if args.names.is_empty() && args.quick && !c.in_quick_suite() {
-            eprintln!(
-                "skipping {} in --quick (full only; `bisph validate --quick {}` runs its reduced variant)",
-                c.name(),
-                c.name()
-            );
-            return false;
-        }
-        args.names.is_empty() || args.names.iter().any(|n| n == c.name())
-    }) {
+    for case in selected {
         eprintln!(
             "validating {} ({})",
             case.name(),
@@ -455,6 +461,26 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             EXIT_VALIDATION_FAILED,
             format!("out of tolerance or failed: {}", failed.join(", ")),
         ))
+    }
+}
+
+/// Reads the experiment data of every selected case before any of them runs: exit code 1
+/// naming each case whose data are missing or unreadable.
+fn check_validation_data(
+    cases: &[&dyn bisph_validate::ValidationCase],
+) -> Result<(), (u8, String)> {
+    let problems: Vec<String> = cases
+        .iter()
+        .filter_map(|c| {
+            c.check_data()
+                .err()
+                .map(|e| format!("validation case {}: {e}", c.name()))
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err((1, problems.join("\n")))
     }
 }
 

@@ -129,6 +129,22 @@ fn malformed_cases_give_named_errors() {
         ),
         ("not TOML", "name = [".to_string(), "not valid TOML"),
         (
+            "TOML syntax with its line",
+            VALID.replace("dx = 0.05", "dx = = 0.05"),
+            "not valid TOML at line 9",
+        ),
+        (
+            "hydrostatic along a periodic axis",
+            VALID
+                .replace("gravity = [0.0, -9.81]", "gravity = [1.0, -9.81]")
+                .replace(
+                    "max = [0.5, 0.5]",
+                    "max = [0.5, 0.5]\npressure = \"hydrostatic\"",
+                )
+                + "[domain]\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\nperiodic = [\"x\"]\n",
+            "periodic axis x",
+        ),
+        (
             "unknown eos",
             VALID.replace("sound_speed = 20.0", "sound_speed = 20.0\neos = \"ideal\""),
             "eos",
@@ -253,6 +269,47 @@ fn midpoint_with_piston_is_thread_count_independent() {
     assert!(
         outputs[0] == outputs[1],
         "outputs differ between 1 and 2 threads"
+    );
+}
+
+/// A step counts as unconverged only against a positive midpoint tolerance: with none (0) every
+/// step runs its maximum iterations by design.
+#[test]
+fn midpoint_steps_are_unconverged_only_against_a_positive_tolerance() {
+    let case = cases_dir().join("adiabatic-piston.toml");
+    let mut counts = Vec::new();
+    for tolerance in ["0.0", "1e-300"] {
+        let dir = temp_dir(&format!("midpoint-tolerance-{tolerance}"));
+        let out = bisph(&[
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--quiet",
+            "--set",
+            "resolution.dx=0.066",
+            "--set",
+            "time.end=0.2",
+            "--set",
+            "output.vtk_interval=0",
+            "--set",
+            &format!("midpoint.tolerance={tolerance}"),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let s = summary(&dir);
+        counts.push((
+            s["unconverged_steps"].as_u64().unwrap(),
+            s["steps"].as_u64().unwrap(),
+        ));
+    }
+    assert_eq!(counts[0].0, 0, "no tolerance: {counts:?}");
+    assert!(
+        counts[1].0 > 0,
+        "a tolerance almost no step reaches: {counts:?}"
     );
 }
 
@@ -589,6 +646,26 @@ fn shepard_integrated_matches_geometric() {
     assert!(
         err.contains("point 1") && err.contains("narrower than 2h") && !err.contains("panicked"),
         "{err}"
+    );
+    // Walls open at the top: a path through the opening would give gamma = 1 near the open
+    // corners, so the method refuses, naming the open wall.
+    let open = VALID.replace("max = [1.0, 1.0]", "max = [1.0, 1.0]\nopen = [\"+y\"]");
+    std::fs::write(&case, open).unwrap();
+    std::fs::write(&points, "0.5,0.2\n").unwrap();
+    let out = bisph(&["shepard", c, "--points", p, "--method", "integrated"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--method integrated")
+            && err.contains("wall[0], a box open at +y")
+            && err.contains("--method geometric"),
+        "{err}"
+    );
+    let out = bisph(&["shepard", c, "--points", p, "--method", "geometric"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
 }
 
@@ -938,4 +1015,29 @@ fn validate_list_gives_a_run_time_per_case() {
     }
     assert!(rows.iter().any(|r| r.starts_with("spheric-test2 ")));
     assert!(stdout.contains("scaled from the quick run"), "{stdout}");
+}
+
+/// A checkpoint temporary left by `kill -9` during its write is removed by the next run in
+/// that folder.
+#[test]
+fn a_stray_checkpoint_temporary_is_removed_by_the_next_run() {
+    let dir = temp_dir("stray-tmp");
+    let case = dir.join("case.toml");
+    std::fs::write(&case, VALID).unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("checkpoint.bin.tmp"), "half a checkpoint").unwrap();
+    let run = bisph(&[
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(!out.join("checkpoint.bin.tmp").exists());
 }

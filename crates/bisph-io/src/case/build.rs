@@ -250,8 +250,9 @@ pub fn build_simulation_with_layout<V: CaseDim>(
                 &eos,
             );
         }
+        // Uniform by default where gravity runs along a periodic axis (a driven channel).
         let hydrostatic = match &block.pressure {
-            None => g > 0.0,
+            None => g > 0.0 && crate::case::check::gravity_along_periodic_axis(case).is_none(),
             Some(InitialPressure::Named(_)) => true,
             Some(InitialPressure::Value(_)) => false,
         };

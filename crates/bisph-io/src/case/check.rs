@@ -299,6 +299,17 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
                     format!("expected \"hydrostatic\", \"hydrostatic-eos\" or a number, found \"{name}\""),
                 );
             }
+            if let Some(axis) = gravity_along_periodic_axis(c) {
+                return e(
+                    &format!("{key}.pressure"),
+                    format!(
+                        "\"{name}\" with gravity along the periodic axis {axis}: the pressure \
+                         would jump where the period closes and start density waves; expected a \
+                         uniform pressure (a number, e.g. 0; the default there) or gravity \
+                         perpendicular to the periodic axes"
+                    ),
+                );
+            }
         }
     }
     if c.wall.is_empty() && c.domain.is_none() {
@@ -983,6 +994,17 @@ fn check_walls_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
         );
     }
     Ok(())
+}
+
+/// The first periodic axis (`"x"`, `"y"` or `"z"`) along which gravity has a component: a
+/// hydrostatic pressure along it cannot be periodic.
+pub(crate) fn gravity_along_periodic_axis(c: &Case) -> Option<&'static str> {
+    c.domain
+        .as_ref()?
+        .periodic_axes()
+        .into_iter()
+        .find(|&a| c.fluid.gravity.get(a).is_some_and(|&g| g != 0.0))
+        .map(|a| ["x", "y", "z"][a])
 }
 
 #[cfg(test)]

@@ -37,9 +37,15 @@ pub fn parse_case(source: &str, text: &str, overrides: &[String]) -> Result<Load
         key: key.to_string(),
         message,
     };
-    let mut doc: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| err("", format!("not valid TOML: {}", e.message())))?;
+    let mut doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        let at = e
+            .span()
+            .map_or(String::new(), |span| line_column(text, span.start));
+        err(
+            "",
+            format!("not valid TOML{at}: {}", e.message().trim_end()),
+        )
+    })?;
     for item in overrides {
         let Some((key, value)) = item.split_once('=') else {
             return Err(err(
@@ -142,6 +148,15 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
     }
     let line_start = before.rfind('\n').map_or(0, |k| k + 1);
     let line = text[line_start..].lines().next().unwrap_or("");
+    // An error at a table header (an unknown table) is the header's own key.
+    let header = line.trim();
+    if let Some(name) = header.strip_prefix("[[").and_then(|s| s.strip_suffix("]]")) {
+        let n = index.get(name).map_or(0, |n| n + 1);
+        return format!("{name}[{n}]");
+    }
+    if let Some(name) = header.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
+        return name.to_string();
+    }
     let key = line
         .split('=')
         .next()
@@ -156,7 +171,53 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
     }
 }
 
+/// ` at line L, column C` (1-based, columns in characters) of the byte offset `at` in `text`.
+fn line_column(text: &str, at: usize) -> String {
+    let before = &text[..at.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before[before.rfind('\n').map_or(0, |k| k + 1)..]
+        .chars()
+        .count()
+        + 1;
+    format!(" at line {line}, column {column}")
+}
+
 /// Where a run writes by default: `out/<case name>`.
 pub fn default_out_dir(case: &Case) -> PathBuf {
     PathBuf::from("out").join(&case.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CASE: &str = "name = \"t\"\ndim = 2\n[fluid]\ndensity = 1000.0\nsound_speed = 20.0\n\
+        [resolution]\ndx = 0.05\n[time]\nend = 0.01\n[[fluid_block]]\nshape = \"box\"\n\
+        min = [0.0, 0.0]\nmax = [0.5, 0.5]\n[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0]\n\
+        max = [1.0, 1.0]\n";
+
+    #[test]
+    fn syntax_errors_give_line_and_column() {
+        let text = CASE.replace("dx = 0.05", "dx = = 0.05");
+        let e = parse_case("c.toml", &text, &[]).unwrap_err();
+        assert!(
+            e.message.contains("not valid TOML at line 7, column 6"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn unknown_tables_are_reported_under_their_own_key() {
+        for (table, key) in [
+            ("[tme]\nend = 1.0\n", "tme"),
+            ("[outptu]\nx = 1\n", "outptu"),
+        ] {
+            let text = CASE.replace("[time]", &format!("{table}[time]"));
+            let e = parse_case("c.toml", &text, &[]).unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+            let text = format!("{CASE}{table}");
+            let e = parse_case("c.toml", &text, &[]).unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+        }
+    }
 }

@@ -29,6 +29,30 @@ pub fn at<T>(path: &Path, r: io::Result<T>) -> Result<T, OutputError> {
     })
 }
 
+/// Removes the temporary files that [`write_atomic`] and the VTK writer leave in `dir` (and its
+/// `vtk/` folder) when a run is killed mid-write (`checkpoint.bin.tmp` after `kill -9`):
+/// files named `NAME.tmp` where `NAME` has an extension bisph writes.
+pub fn remove_stale_temporaries(dir: &Path) {
+    const WRITTEN: [&str; 6] = ["bin", "json", "toml", "vtu", "pvd", "csv"];
+    for folder in [dir.to_path_buf(), dir.join("vtk")] {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let Some(stem) = name.to_str().and_then(|n| n.strip_suffix(".tmp")) else {
+                continue;
+            };
+            let ours = Path::new(stem)
+                .extension()
+                .is_some_and(|e| WRITTEN.iter().any(|w| e == *w));
+            if ours && entry.file_type().is_ok_and(|t| t.is_file()) {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+}
+
 /// Writes `bytes` to `path` through a temporary file (synced to disk) and a rename, so a crash
 /// leaves the old file or the new one, never a half-written one. On failure the temporary file
 /// is removed and the old file kept.
@@ -49,4 +73,28 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         });
     }
     at(path, std::fs::rename(&tmp, path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stale_temporaries_are_removed_and_other_files_kept() {
+        let dir = std::env::temp_dir().join(format!("bisph-stale-tmp-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("vtk")).unwrap();
+        for name in [
+            "checkpoint.bin.tmp",
+            "vtk/fluid_000001.vtu.tmp",
+            "notes.tmp",
+            "energy.csv",
+        ] {
+            std::fs::write(dir.join(name), "x").unwrap();
+        }
+        remove_stale_temporaries(&dir);
+        assert!(!dir.join("checkpoint.bin.tmp").exists());
+        assert!(!dir.join("vtk/fluid_000001.vtu.tmp").exists());
+        assert!(dir.join("notes.tmp").exists() && dir.join("energy.csv").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -18,6 +18,9 @@ pub struct DataArray<'a> {
     pub components: usize,
     /// Tuple-major values: `values[i * components + c]`.
     pub values: &'a [f64],
+    /// Written as `Int64` (whole numbers such as particle ids, exact up to 2^53), else as
+    /// `Float64`.
+    pub integer: bool,
 }
 
 /// VTK cell type ids used here.
@@ -219,7 +222,8 @@ fn write_vtu<W: Write>(
     // Headers in the same order as the binary blocks follow in AppendedData.
     let named = |a: &DataArray| ArrayHeader {
         attrs: format!(
-            "type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\"",
+            "type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"",
+            if a.integer { "Int64" } else { "Float64" },
             escape_xml(a.name),
             a.components
         ),
@@ -282,13 +286,15 @@ fn write_vtu<W: Write>(
     w.write_all(b"      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n")?;
     w.write_all(b"  <AppendedData encoding=\"raw\">\n   _")?;
 
-    for (a, h) in point_data.iter().zip(&pd) {
+    for (a, h) in point_data.iter().chain(cell_data).zip(pd.iter().chain(&cd)) {
         w.write_all(&h.bytes.to_le_bytes())?;
-        write_f64s(w, a.values)?;
-    }
-    for (a, h) in cell_data.iter().zip(&cd) {
-        w.write_all(&h.bytes.to_le_bytes())?;
-        write_f64s(w, a.values)?;
+        if a.integer {
+            for &v in a.values {
+                w.write_all(&(v as i64).to_le_bytes())?;
+            }
+        } else {
+            write_f64s(w, a.values)?;
+        }
     }
     w.write_all(&pts.bytes.to_le_bytes())?;
     for p in points {
@@ -490,11 +496,19 @@ mod tests {
                 name: "rho",
                 components: 1,
                 values: &rho,
+                integer: false,
             },
             DataArray {
                 name: "v<&\"'>",
                 components: 3,
                 values: &vel,
+                integer: false,
+            },
+            DataArray {
+                name: "id",
+                components: 1,
+                values: &[7.0, 0.0, 9_007_199_254_740_992.0],
+                integer: true,
             },
         ];
         write_points_vtu(&path, &points, &pd).unwrap();
@@ -509,6 +523,7 @@ mod tests {
             [
                 "rho",
                 "v<&\"'>",
+                "id",
                 "Points",
                 "connectivity",
                 "offsets",
@@ -518,12 +533,13 @@ mod tests {
         assert!(same_bits(&arrays[0].f64s(), &rho));
         assert_eq!(arrays[1].components, 3);
         assert!(same_bits(&arrays[1].f64s(), &vel));
-        assert_eq!(arrays[2].components, 3);
-        assert!(same_bits(&arrays[2].f64s(), points.as_flattened()));
-        assert_eq!(arrays[3].i64s(), [0, 1, 2]);
-        assert_eq!(arrays[4].i64s(), [1, 2, 3]);
-        assert_eq!(arrays[5].ty, "UInt8");
-        assert_eq!(arrays[5].bytes, [1, 1, 1]);
+        assert_eq!(arrays[2].i64s(), [7, 0, 1 << 53]);
+        assert_eq!(arrays[3].components, 3);
+        assert!(same_bits(&arrays[3].f64s(), points.as_flattened()));
+        assert_eq!(arrays[4].i64s(), [0, 1, 2]);
+        assert_eq!(arrays[5].i64s(), [1, 2, 3]);
+        assert_eq!(arrays[6].ty, "UInt8");
+        assert_eq!(arrays[6].bytes, [1, 1, 1]);
 
         // Overwriting an existing file works and leaves no temporary.
         write_points_vtu(&path, &points[..1], &[]).unwrap();
@@ -558,11 +574,13 @@ mod tests {
                 name: "p",
                 components: 1,
                 values: &p,
+                integer: false,
             },
             DataArray {
                 name: "force",
                 components: 2,
                 values: &f,
+                integer: false,
             },
         ];
         write_cells_vtu(&path, &verts, &cells, &cd).unwrap();
@@ -596,6 +614,7 @@ mod tests {
             name: "rho",
             components: 1,
             values: &[],
+            integer: false,
         }];
         write_points_vtu(&a, &[], &pd).unwrap();
         write_cells_vtu(&b, &[], &[], &pd).unwrap();
@@ -626,18 +645,21 @@ mod tests {
             name: "density",
             components: 1,
             values: &[1.0],
+            integer: false,
         }];
         check(write_points_vtu(&path, &pts, &short), "density");
         let zero = [DataArray {
             name: "nothing",
             components: 0,
             values: &[],
+            integer: false,
         }];
         check(write_points_vtu(&path, &pts, &zero), "nothing");
         let huge = [DataArray {
             name: "huge",
             components: usize::MAX,
             values: &[1.0],
+            integer: false,
         }];
         check(write_points_vtu(&path, &pts, &huge), "huge");
         check(write_cells_vtu(&path, &pts, &[vec![0, 2]], &[]), "vertex 2");
@@ -646,6 +668,7 @@ mod tests {
             name: "pressure",
             components: 1,
             values: &[1.0, 2.0],
+            integer: false,
         }];
         check(write_cells_vtu(&path, &pts, &[vec![0, 1]], &cd), "pressure");
         let mut pvd = PvdCollection::new();

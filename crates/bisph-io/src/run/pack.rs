@@ -360,26 +360,31 @@ fn pack_dim<V: CaseDim>(
                 name: "block",
                 components: 1,
                 values: &block_id,
+                integer: false,
             },
             DataArray {
                 name: "grad_c",
                 components: 1,
                 values: &gradc,
+                integer: false,
             },
             DataArray {
                 name: "wall_distance",
                 components: 1,
                 values: &dist,
+                integer: false,
             },
             DataArray {
                 name: "displacement",
                 components: 3,
                 values: &disp,
+                integer: false,
             },
             DataArray {
                 name: "frozen",
                 components: 1,
                 values: &frozen,
+                integer: false,
             },
         ],
     )
@@ -392,6 +397,7 @@ fn pack_dim<V: CaseDim>(
             name: "block",
             components: 1,
             values: &block_id,
+            integer: false,
         }],
     )
     .map_err(|e| vtk_err(&path, e))?;
@@ -405,11 +411,13 @@ fn pack_dim<V: CaseDim>(
                 name: "normal",
                 components: 3,
                 values: &wall_normals,
+                integer: false,
             },
             DataArray {
                 name: "block",
                 components: 1,
                 values: &wall_block,
+                integer: false,
             },
         ],
     )

@@ -441,6 +441,7 @@ pub fn run<V: CaseDim>(
     let (mut sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
     check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
     at(out, std::fs::create_dir_all(out))?;
+    crate::formats::files::remove_stale_temporaries(out);
     let checkpoint_path = out.join(checkpoint::FILE_NAME);
     let resumed = match options.resume {
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
@@ -834,7 +835,8 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         counters.residue_max = counters.residue_max.max(sim.last_residue);
         if let (Some(csv), Some(p)) = (self.outputs.get(MIDPOINT), self.midpoint) {
             csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
-            if sim.last_residue >= p.tolerance {
+            // With no tolerance (0) every step runs its maximum iterations: none is a failure.
+            if p.tolerance > 0.0 && sim.last_residue >= p.tolerance {
                 self.counters.unconverged += 1;
             }
         }

@@ -106,6 +106,22 @@ pub fn gamma_at<V: CaseDim>(
         }
         ShepardKind::Integrated => {
             let walls = &sim.walls;
+            let corners: Vec<[f64; 3]> =
+                walls.elements.corners.iter().map(|c| c.to_xyz()).collect();
+            if let Some([x, y]) = open_wall_end(&corners) {
+                let named = open_walls(loaded);
+                return Err(format!(
+                    "--method integrated needs walls that close around the fluid (it integrates \
+                     grad gamma along a path from where gamma = 1, and a path through an opening \
+                     gives a wrong gamma), but the walls end at ({x}, {y}){}; close them (a box \
+                     without `open` sides, a polygon) or use --method geometric",
+                    if named.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" (open: {})", named.join(", "))
+                    }
+                ));
+            }
             // Any path that stays in the fluid fits in the walls' bounding box, plus the support.
             let (mut lo, mut hi) = (V::from_slice(&[f64::MAX; 3]), V::from_slice(&[f64::MIN; 3]));
             for &c in &walls.elements.corners {
@@ -150,6 +166,53 @@ pub fn gamma_at<V: CaseDim>(
                 .collect()
         }
     })
+}
+
+/// A segment end of 2-D walls that no other segment shares (where the walls stop and leave
+/// the fluid open, like an open box side or the end of a polyline); `None` when the walls
+/// close.
+fn open_wall_end(corners: &[[f64; 3]]) -> Option<[f64; 2]> {
+    let extent = corners
+        .iter()
+        .flat_map(|c| [c[0].abs(), c[1].abs()])
+        .fold(1.0f64, f64::max);
+    let tolerance = 1e-9 * extent;
+    let mut ends: Vec<[f64; 2]> = corners.iter().map(|c| [c[0], c[1]]).collect();
+    ends.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let mut partners = vec![0usize; ends.len()];
+    for i in 0..ends.len() {
+        for j in i + 1..ends.len() {
+            if ends[j][0] - ends[i][0] > tolerance {
+                break;
+            }
+            if (ends[j][1] - ends[i][1]).abs() <= tolerance {
+                partners[i] += 1;
+                partners[j] += 1;
+            }
+        }
+    }
+    ends.iter()
+        .zip(&partners)
+        .find(|(_, &n)| n == 0)
+        .map(|(e, _)| *e)
+}
+
+/// The walls of a case that are open by their definition: boxes with `open` sides and
+/// polylines, as `wall[k], ...`.
+fn open_walls(loaded: &LoadedCase) -> Vec<String> {
+    loaded
+        .case
+        .wall
+        .iter()
+        .enumerate()
+        .filter_map(|(k, w)| match w.shape.as_str() {
+            "box" if !w.open.is_empty() => {
+                Some(format!("wall[{k}], a box open at {}", w.open.join(" and ")))
+            }
+            "polyline" => Some(format!("wall[{k}], a polyline")),
+            _ => None,
+        })
+        .collect()
 }
 
 /// The `x,y[,z],gamma` table `bisph shepard` prints.
