@@ -76,10 +76,43 @@ fn a_dam_break_column_is_not_at_rest_and_keeps_its_start_bit_for_bit() {
 }
 
 #[test]
-fn settling_is_off_unless_asked_for() {
+fn settling_is_off_when_the_case_says_so() {
     let loaded = parse_case("<tank>", TANK, &["settle.enabled=false".into()]).unwrap();
     let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
     assert!(settle(&loaded, &mut sim).unwrap().is_none());
+}
+
+/// The tank without a `[settle]` table: what a case gets by default.
+fn by_default(case: &str) -> String {
+    case.replace("[settle]\nenabled = true\n", "")
+}
+
+#[test]
+fn a_resting_tank_settles_by_default() {
+    let loaded = parse_case("<tank>", &by_default(TANK), &[]).unwrap();
+    let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
+    assert!(sim.rests_against_walls());
+    let report = settle(&loaded, &mut sim)
+        .unwrap()
+        .expect("settles by default");
+    assert_ne!(report.outcome, "not_at_rest");
+}
+
+#[test]
+fn a_dam_break_column_or_a_moving_start_is_not_settled_by_default() {
+    let dam = by_default(TANK).replace("max = [1.0, 0.5]", "max = [0.4, 0.5]");
+    let loaded = parse_case("<dam>", &dam, &[]).unwrap();
+    let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
+    assert!(!sim.rests_against_walls(), "the column's free face");
+    assert!(settle(&loaded, &mut sim).unwrap().is_none());
+    let moving = parse_case(
+        "<tank>",
+        &by_default(TANK),
+        &["fluid_block.0.velocity=[1.0, 0.0]".into()],
+    )
+    .unwrap();
+    let mut sim: Simulation<DVec2> = build_simulation(&moving).unwrap();
+    assert!(settle(&moving, &mut sim).unwrap().is_none());
 }
 
 #[test]

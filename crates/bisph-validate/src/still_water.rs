@@ -1,9 +1,11 @@
 //! `still-water`: a tank of water at rest must stay at rest, for every wall model.
 //!
-//! Three shipped tanks, each water H = 0.5 m deep: `cases/hydrostatic-2d.toml` (a 1 m wide box),
-//! `cases/still-water-slope-2d.toml` (a step and a 30 degree side, walls that cut the lattice)
-//! and `cases/still-water-box-3d.toml` (a 0.5 m x 0.5 m box). Each runs with each wall model
-//! chosen by `boundary` (and `shepard`) alone, everything else as the case file has it,
+//! Four shipped tanks: `cases/hydrostatic-2d.toml` (a 1 m wide box, water H = 0.5 m deep),
+//! `cases/still-water-slope-2d.toml` (a step and a 30 degree side, walls that cut the lattice,
+//! H = 0.5 m), `cases/still-water-box-3d.toml` (a 0.5 m x 0.5 m box, H = 0.5 m) and
+//! `cases/still-water-spheric-3d.toml` (the SPHERIC test 2 tank and obstacle, H = 0.55 m
+//! everywhere). Each runs with each wall model chosen by `boundary` (and `shepard`) alone,
+//! everything else as the case file has it,
 //! settling included. The bars: the largest particle speed over the whole run below 1% of
 //! `sqrt(g H)`; the kinetic energy not growing (its mean over the last quarter of the run not
 //! above its mean over the second quarter); the wall model's own pressure on the bottom at
@@ -17,8 +19,7 @@ use bisph_io::formats::plot::line_plot_png as plot;
 use glam::{DVec2, DVec3};
 use std::path::Path;
 
-/// Depth `H` [m], gravity [m/s^2] and density [kg/m^3] of every tank.
-const DEPTH: f64 = 0.5;
+/// Gravity [m/s^2] and density [kg/m^3] of every tank.
 const G: f64 = 9.81;
 const RHO: f64 = 1000.0;
 
@@ -52,6 +53,8 @@ struct Tank {
     name: &'static str,
     text: &'static str,
     dim: usize,
+    /// Water depth `H` [m].
+    depth: f64,
     /// `(dx, end)` at quick and at full resolution.
     quick: (f64, f64),
     full: (f64, f64),
@@ -60,11 +63,12 @@ struct Tank {
     models: &'static [(Model, &'static [&'static str], &'static str)],
 }
 
-const TANKS: [Tank; 3] = [
+const TANKS: [Tank; 4] = [
     Tank {
         name: "box 2-D",
         text: include_str!("../../../cases/hydrostatic-2d.toml"),
         dim: 2,
+        depth: 0.5,
         quick: (0.025, 5.0),
         full: (0.0125, 20.0),
         bottom: [0.5, 0.0, 0.0],
@@ -78,6 +82,7 @@ const TANKS: [Tank; 3] = [
         name: "slope 2-D",
         text: include_str!("../../../cases/still-water-slope-2d.toml"),
         dim: 2,
+        depth: 0.5,
         quick: (0.025, 5.0),
         full: (0.0125, 20.0),
         bottom: [0.15, 0.0, 0.0],
@@ -91,6 +96,7 @@ const TANKS: [Tank; 3] = [
         name: "box 3-D",
         text: include_str!("../../../cases/still-water-box-3d.toml"),
         dim: 3,
+        depth: 0.5,
         quick: (0.05, 5.0),
         full: (0.025, 10.0),
         bottom: [0.25, 0.25, 0.0],
@@ -98,6 +104,16 @@ const TANKS: [Tank; 3] = [
             (ENERGY, &["speed", "growth", "bottom"], ENERGY_LIMITATION),
             (BI, &["speed"], COARSE_3D_LIMITATION),
         ],
+    },
+    Tank {
+        name: "SPHERIC obstacle 3-D",
+        text: include_str!("../../../cases/still-water-spheric-3d.toml"),
+        dim: 3,
+        depth: 0.55,
+        quick: (0.55 / 6.0, 2.0),
+        full: (0.55 / 10.0, 10.0),
+        bottom: [2.0, 0.5, 0.0],
+        models: &[(BI, &[], "")],
     },
 ];
 
@@ -135,7 +151,7 @@ fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<Still
         Ok(None) => "no settling".into(),
         Err(e) => format!("settling stopped: {e}"),
     };
-    let speed_scale = (G * DEPTH).sqrt();
+    let speed_scale = (G * tank.depth).sqrt();
     let mass: f64 = sim.fluid.mass.iter().sum();
     let bottom = bottom_element(&sim, V::from_slice(&tank.bottom[..V::DIM]))
         .ok_or("the tank has no bottom wall element")?;
@@ -167,9 +183,10 @@ fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<Still
             }
         }
         run.t.push(sim.time);
-        run.kinetic.push(sim.energy().kinetic / (mass * G * DEPTH));
+        run.kinetic
+            .push(sim.energy().kinetic / (mass * G * tank.depth));
         run.bottom
-            .push(sim.walls.elements.pressure[bottom] / (RHO * G * DEPTH));
+            .push(sim.walls.elements.pressure[bottom] / (RHO * G * tank.depth));
     }
     run.behind = sim
         .walls
@@ -272,7 +289,7 @@ impl ValidationCase for StillWater {
         "still-water"
     }
     fn description(&self) -> &'static str {
-        "still water in 2-D and 3-D tanks (a box, a step and a sloped side) for each wall model with the case defaults: peak speed, kinetic energy trend, bottom pressure, no particle behind a wall"
+        "still water in 2-D and 3-D tanks (a box, a step and a sloped side, the SPHERIC test 2 obstacle) for each wall model with the case defaults: peak speed, kinetic energy trend, bottom pressure, no particle behind a wall"
     }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
         let mut report = CaseReport {

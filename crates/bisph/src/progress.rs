@@ -80,6 +80,10 @@ impl RunProgress {
 
     /// Takes one report of the run loop (called every step).
     pub fn report(&mut self, p: Progress) {
+        if p.settling {
+            self.report_settling(&p);
+            return;
+        }
         let first_step = *self.start.step.get_or_insert_with(|| {
             self.start.time = p.time;
             self.start.wall = Instant::now();
@@ -103,6 +107,29 @@ impl RunProgress {
                     let line = line(&p, first_step, self.start.time, self.start.wall.elapsed());
                     // A log that cannot be written must not stop the run.
                     let _ = writeln!(std::io::stderr().lock(), "{line}");
+                }
+            }
+        }
+    }
+
+    /// A settling step: the bar shows the settling time against its most; plain lines say
+    /// that the run is settling.
+    fn report_settling(&mut self, p: &Progress) {
+        match &mut self.reporter {
+            Reporter::Quiet => {}
+            Reporter::Bar(bar) => {
+                if p.step.is_multiple_of(20) {
+                    bar.set_position((1000.0 * p.time / p.end).min(1000.0) as u64);
+                    bar.set_message(format!(
+                        "{:.4} s of settling before t = 0, step {}",
+                        p.time, p.step
+                    ));
+                }
+            }
+            Reporter::Lines { interval, last } => {
+                if last.elapsed() >= *interval {
+                    *last = Instant::now();
+                    let _ = writeln!(std::io::stderr().lock(), "{}", settling_line(p));
                 }
             }
         }
@@ -142,6 +169,14 @@ fn line(p: &Progress, step0: u64, time0: f64, elapsed: Duration) -> String {
     )
 }
 
+/// One plain line while settling before `t = 0`.
+fn settling_line(p: &Progress) -> String {
+    format!(
+        "settling before t = 0: {:.4} s of at most {:.4} s, step {} (settle.enabled = false skips it)",
+        p.time, p.end, p.step
+    )
+}
+
 /// `h:mm:ss`.
 fn clock(seconds: f64) -> String {
     if !seconds.is_finite() {
@@ -161,6 +196,7 @@ mod tests {
             time: 0.25,
             end: 1.0,
             step: 1100,
+            settling: false,
         };
         let l = line(&p, 100, 0.0, Duration::from_secs(10));
         assert_eq!(
@@ -175,6 +211,7 @@ mod tests {
             time: 0.6,
             end: 1.0,
             step: 600,
+            settling: false,
         };
         // Resumed at t = 0.5, step 500: 0.1 s in 20 s, 0.4 s to go.
         let l = line(&p, 500, 0.5, Duration::from_secs(20));

@@ -197,6 +197,8 @@ fn fluid_particles(name: &str, case: &str) -> u64 {
         "--quiet",
         "--set",
         "time.end=0.002",
+        "--set",
+        "settle.enabled=false",
     ]);
     assert!(
         o.status.success(),
@@ -241,6 +243,19 @@ fn a_walls_block_fills_a_3d_tank_around_an_stl_obstacle() {
          [[fluid_block]]\nshape = \"walls\"\nlevel = 1.0\n"
     );
     assert_eq!(fluid_particles("fill-3d", &case), 4000 - 700);
+}
+
+#[test]
+fn a_walls_block_leaves_out_an_obstacle_standing_on_the_floor_3d() {
+    // A box obstacle without a bottom of its own (open towards the floor): the points inside
+    // meet the tank's floor going down, but the obstacle's top going up. 20 x 20 x 10 cells
+    // below the level, minus the 10 x 10 x 7 inside the obstacle.
+    let case = format!(
+        "{TANK_3D}[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [2.0, 2.0, 2.0]\nopen = [\"+z\"]\n\
+         [[wall]]\nshape = \"box\"\nmin = [0.5, 0.5, 0.0]\nmax = [1.5, 1.5, 0.7]\nopen = [\"-z\"]\nfluid = \"outside\"\n\
+         [[fluid_block]]\nshape = \"walls\"\nlevel = 1.0\n"
+    );
+    assert_eq!(fluid_particles("fill-3d-floor-obstacle", &case), 4000 - 700);
 }
 
 #[test]

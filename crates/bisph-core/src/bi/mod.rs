@@ -142,6 +142,17 @@ pub fn kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V], radius
     }
 }
 
+/// [`ElementIntegrals::path_crosses_element`] for any vector type.
+#[inline(always)]
+pub fn path_crosses_element<V: Vector>(from: V, to: V, corners: &[V]) -> bool {
+    let ends = [from, to];
+    match (V::as_concrete(&ends), V::as_concrete(corners)) {
+        (Concrete::Two(e), Concrete::Two(c)) => DVec2::path_crosses_element(e[0], e[1], c),
+        (Concrete::Three(e), Concrete::Three(c)) => DVec3::path_crosses_element(e[0], e[1], c),
+        _ => unreachable!("a path and its element's corners share one vector type"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,13 +19,19 @@ use super::Simulation;
 use crate::dim::Vector;
 use crate::error::SimError;
 use crate::particles::Fluid;
+use crate::walls::geometric_shepard;
 use rayon::prelude::*;
 use std::time::Instant;
 
 impl<V: Vector> Simulation<V> {
     /// Settles the fluid (see the module documentation) with the walls held at their
     /// `t = 0` place, then restarts the clock and the energy books at the state reached.
-    pub fn settle(&mut self, params: &SettleParams) -> Result<SettleReport, SimError> {
+    /// `on_step` sees the report after every settling step.
+    pub fn settle(
+        &mut self,
+        params: &SettleParams,
+        on_step: &mut dyn FnMut(&SettleReport),
+    ) -> Result<SettleReport, SimError> {
         let clock = Instant::now();
         let original = self.fluid.clone();
         let start = positions_by_id(&self.fluid);
@@ -52,6 +58,7 @@ impl<V: Vector> Simulation<V> {
             report.max_speed = self.max_speed();
             report.max_acceleration = self.max_acceleration();
             report.max_displacement = max_displacement(&self.fluid, &start);
+            on_step(&report);
             if self.energy().kinetic > params.max_kinetic {
                 report.outcome = SettleOutcome::NotAtRest;
                 break;
@@ -67,6 +74,56 @@ impl<V: Vector> Simulation<V> {
         self.restart_at_rest();
         report.wall_seconds = clock.elapsed().as_secs_f64();
         Ok(report)
+    }
+
+    /// `true` when the fluid's only free surface is a level top, as in a tank at rest: every
+    /// particle deeper than one kernel support below the highest one whose support no wall
+    /// reaches (geometric Shepard factor 1, paper 2, eq 8) has it filled with fluid,
+    /// `sum_j W_ij V_j >= FILLED`. A dam-break column or a block in free fall has free faces
+    /// below its top, where that sum falls to about one half. Particles a wall's support
+    /// reaches are not judged: a lattice that does not fit the walls leaves gaps there, which
+    /// settling closes.
+    pub fn rests_against_walls(&self) -> bool {
+        /// Fluid sum below which a particle's support reaches a free surface.
+        const FILLED: f64 = 0.8;
+        /// Geometric gamma above which no wall reaches a particle's support.
+        const AWAY_FROM_WALLS: f64 = 1.0 - 1e-6;
+        let g = self.config.gravity;
+        if g.length() == 0.0 {
+            return false;
+        }
+        let up = -g / g.length();
+        let f = &self.fluid;
+        // A copy of the fluid grid (its periodic axes included), so the simulation's own
+        // neighbour data stays as it is.
+        let mut grid = self.fluid_grid.clone();
+        grid.rebuild(&f.position);
+        let kernel = &self.config.kernel;
+        let top = f
+            .position
+            .iter()
+            .map(|r| r.dot(up))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let volume: Vec<f64> = f
+            .mass
+            .iter()
+            .zip(&f.density)
+            .map(|(m, rho)| m / rho)
+            .collect();
+        let walls = &self.walls;
+        f.position.par_iter().all(|&x| {
+            if x.dot(up) > top - kernel.support
+                || geometric_shepard::gamma(kernel, x, &walls.elements, &walls.grid)
+                    < AWAY_FROM_WALLS
+            {
+                return true;
+            }
+            let mut sum = 0.0;
+            grid.for_each_neighbour(x, &f.position, kernel.support, |j, _, r| {
+                sum += kernel.value(r) * volume[j];
+            });
+            sum >= FILLED
+        })
     }
 
     /// Zero velocities, the clock at 0 and the energy books closed, rates at the state.

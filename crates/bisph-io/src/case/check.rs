@@ -912,34 +912,16 @@ fn check_settle(loaded: &LoadedCase) -> Result<(), CaseError> {
             }
         }
     }
-    if !s.enabled {
+    if s.enabled != Some(true) {
         return Ok(());
     }
-    let refuse = |why: String| {
-        Err(loaded.error(
+    match c.settle_obstacle() {
+        Some(why) => Err(loaded.error(
             "settle.enabled",
             format!("settling needs fluid at rest under gravity with fixed walls: {why}"),
-        ))
-    };
-    if c.fluid.gravity.iter().all(|&g| g == 0.0) {
-        return refuse("the case has no gravity".into());
+        )),
+        None => Ok(()),
     }
-    if c.flux.is_some() {
-        return refuse("the case has a flux-driving force ([flux])".into());
-    }
-    for (k, block) in c.fluid_block.iter().enumerate() {
-        if let Some(v) = &block.velocity {
-            if v.iter().any(|&x| x != 0.0) {
-                return refuse(format!("fluid_block[{k}].velocity is not zero"));
-            }
-        }
-    }
-    for (k, body) in c.body.iter().enumerate() {
-        if body.motion.is_some() || body.piston.is_some() || body.free.is_some() {
-            return refuse(format!("body[{k}] (\"{}\") moves", body.name));
-        }
-    }
-    Ok(())
 }
 
 /// A `shape = "walls"` block: walls to fill, gravity, a finite `level` and `clearance`, no

@@ -217,6 +217,43 @@ impl Case {
         })
     }
 
+    /// Why the case cannot settle before `t = 0`, or `None` when it can: settling needs fluid
+    /// at rest under gravity (no block velocity, no flux forcing, no periodic axis along
+    /// gravity) with fixed walls (no moving, piston or free body).
+    pub fn settle_obstacle(&self) -> Option<String> {
+        let g = &self.fluid.gravity;
+        if g.iter().all(|&x| x == 0.0) {
+            return Some("the case has no gravity".into());
+        }
+        if self.flux.is_some() {
+            return Some("the case has a flux-driving force ([flux])".into());
+        }
+        if let Some(domain) = &self.domain {
+            if let Some(&axis) = domain
+                .periodic_axes()
+                .iter()
+                .find(|&&k| g.get(k).is_some_and(|&x| x != 0.0))
+            {
+                let name = ["x", "y", "z"][axis];
+                return Some(format!("gravity has a part along the periodic axis {name}"));
+            }
+        }
+        for (k, block) in self.fluid_block.iter().enumerate() {
+            if block
+                .velocity
+                .as_ref()
+                .is_some_and(|v| v.iter().any(|&x| x != 0.0))
+            {
+                return Some(format!("fluid_block[{k}].velocity is not zero"));
+            }
+        }
+        self.body
+            .iter()
+            .enumerate()
+            .find(|(_, b)| b.motion.is_some() || b.piston.is_some() || b.free.is_some())
+            .map(|(k, b)| format!("body[{k}] (\"{}\") moves", b.name))
+    }
+
     /// The equation of state in force: `fluid.eos`, or the wall model's (Tait for `usaw`).
     pub fn eos_name(&self) -> EosName {
         self.fluid.eos.unwrap_or(match self.boundary {
@@ -1016,9 +1053,10 @@ pub struct Case {
 #[derive(Debug, Clone, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct SettleSection {
-    /// Settle before the run (fluid at rest under gravity, walls fixed).
-    #[serde(default)]
-    pub enabled: bool,
+    /// `true`: settle before the run (refused where the case cannot settle); `false`: never;
+    /// left out: settle when the case can and its fluid rests against walls with a level free
+    /// surface.
+    pub enabled: Option<bool>,
     /// Damping rate `beta` [1/s] (default: twice the lowest sloshing frequency of the fluid,
     /// `2 sqrt(g k tanh(k H))` with `k = pi / L`, `L` and `H` its width and depth).
     pub damping: Option<f64>,

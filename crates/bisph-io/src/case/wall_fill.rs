@@ -1,8 +1,9 @@
 //! `shape = "walls"`: the fluid inside the case's walls below a level. A lattice over the
 //! walls' bounding box keeps the points below `level` that lie above a floor (the first wall
 //! met straight down along gravity faces down, out of the fluid: water poured in from above
-//! would rest there) and at least `clearance` from every wall. Obstacles and bodies are cut
-//! out the same way: a point inside one meets its bottom, which faces up.
+//! would rest there), below which the walls are open or close with a lid, and at least
+//! `clearance` from every wall. Obstacles and bodies are cut out the same way: a point inside
+//! one meets its bottom going down, which faces up, or its top going up, which faces down.
 
 use crate::case::build::oriented_wall_shapes;
 use crate::case::dim::CaseDim;
@@ -91,11 +92,20 @@ fn facet<V: CaseDim>(s: &ElementShape<V>) -> Facet {
     }
 }
 
-/// `true` when the first facet met from `x` along `down` faces down (out of the fluid).
+/// `true` when `x` lies in the water the walls hold: the first facet met straight down faces
+/// down (out of the fluid: a floor), and straight up the walls are open or the first facet met
+/// faces up (a lid). A point inside an obstacle meets its bottom going down, or, where the
+/// obstacle stands on the floor without a bottom of its own, its top going up, which faces down.
 fn above_a_floor(facets: &[Facet], x: DVec3, down: DVec3) -> bool {
+    first_facing(facets, x, down).is_some_and(|facing| facing > 0.0)
+        && first_facing(facets, x, -down).is_none_or(|facing| facing > 0.0)
+}
+
+/// `normal . dir` of the first facet met from `x` along `dir` (`None`: none is met).
+fn first_facing(facets: &[Facet], x: DVec3, dir: DVec3) -> Option<f64> {
     let mut first: Option<(f64, f64)> = None;
     for f in facets {
-        let facing = f.normal.dot(down);
+        let facing = f.normal.dot(dir);
         if facing.abs() < 1e-12 {
             continue;
         }
@@ -103,11 +113,11 @@ fn above_a_floor(facets: &[Facet], x: DVec3, down: DVec3) -> bool {
         if s <= 0.0 || first.is_some_and(|(best, _)| s >= best) {
             continue;
         }
-        if contains(f, x + down * s) {
+        if contains(f, x + dir * s) {
             first = Some((s, facing));
         }
     }
-    first.is_some_and(|(_, facing)| facing > 0.0)
+    first.map(|(_, facing)| facing)
 }
 
 /// `true` when `q`, a point of the facet's plane, lies on the facet.

@@ -135,6 +135,7 @@ fn settle_or_recall<V: CaseDim>(
     sim: &mut Simulation<V>,
     out: &Path,
     resumed: bool,
+    progress: &mut dyn FnMut(Progress),
 ) -> Result<Option<SettlingSummary>, RunError> {
     let path = out.join(SETTLING_FILE);
     if resumed {
@@ -146,7 +147,15 @@ fn settle_or_recall<V: CaseDim>(
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = crate::run::settle::settle(loaded, sim)
+    let report = &mut |p: crate::run::settle::SettlingProgress| {
+        progress(Progress {
+            time: p.time,
+            end: p.max_time,
+            step: p.step,
+            settling: true,
+        })
+    };
+    let settling = crate::run::settle::settle_reporting(loaded, sim, report)
         .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
     if let Some(s) = &settling {
         let text = serde_json::to_string_pretty(s).expect("a settling report serialises");
@@ -164,6 +173,9 @@ pub struct Progress {
     pub end: f64,
     /// Steps so far.
     pub step: u64,
+    /// `true` while settling before `t = 0`: `time` is then the settling time, `end` the most
+    /// settling time and `step` the settling steps.
+    pub settling: bool,
 }
 
 /// How `bisph run` runs, beyond the case.
@@ -447,7 +459,7 @@ pub fn run<V: CaseDim>(
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
-    let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some())?;
+    let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some(), progress)?;
     let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
     let ending = active.advance_to_end(&mut sim, options, progress)?;
     active.finish(&mut sim, settling, ending)
@@ -613,6 +625,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                 time: t,
                 end,
                 step: sim.step,
+                settling: false,
             });
             if last {
                 return Ok(Ending::Reached);

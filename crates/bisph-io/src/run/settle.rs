@@ -60,10 +60,21 @@ impl SettlingSummary {
     }
 }
 
-/// The settling parameters of a built simulation (`None` when `[settle]` is off).
+/// Whether the run settles first: as `settle.enabled` says, or, left out, when the case can
+/// settle and its fluid rests against walls below a level free surface
+/// ([`Simulation::rests_against_walls`]; a dam-break column does not).
+pub fn settles<V: Vector>(loaded: &LoadedCase, sim: &Simulation<V>) -> bool {
+    let c = &loaded.case;
+    c.settle
+        .enabled
+        .unwrap_or_else(|| c.settle_obstacle().is_none() && sim.rests_against_walls())
+}
+
+/// The settling parameters of a built simulation (`None` when it does not settle,
+/// [`settles`]).
 pub fn params<V: Vector>(loaded: &LoadedCase, sim: &Simulation<V>) -> Option<SettleParams> {
     let s = &loaded.case.settle;
-    if !s.enabled {
+    if !settles(loaded, sim) {
         return None;
     }
     let gravity = sim.config.gravity;
@@ -87,16 +98,44 @@ pub fn params<V: Vector>(loaded: &LoadedCase, sim: &Simulation<V>) -> Option<Set
     })
 }
 
-/// Settles a fresh simulation when the case asks for it; returns what `summary.json` reports.
+/// Settles a fresh simulation when it settles ([`settles`]); returns what `summary.json`
+/// reports.
 pub fn settle<V: Vector>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
 ) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
+    settle_reporting(loaded, sim, &mut |_| {})
+}
+
+/// [`settle`], calling `progress` after every settling step with the settling time, the most
+/// settling time and the steps so far.
+pub fn settle_reporting<V: Vector>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    progress: &mut dyn FnMut(SettlingProgress),
+) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
     let Some(params) = params(loaded, sim) else {
         return Ok(None);
     };
-    let report = sim.settle(&params)?;
+    let report = sim.settle(&params, &mut |r: &SettleReport| {
+        progress(SettlingProgress {
+            time: r.time,
+            max_time: params.max_time,
+            step: r.steps,
+        })
+    })?;
     Ok(Some(SettlingSummary::new(&report, &params)))
+}
+
+/// Where settling stands, for a front end.
+#[derive(Debug, Clone, Copy)]
+pub struct SettlingProgress {
+    /// Settling time so far [s].
+    pub time: f64,
+    /// Most settling time [s].
+    pub max_time: f64,
+    /// Settling steps so far.
+    pub step: u64,
 }
 
 /// Depth (extent along `g`) and width (largest extent along a coordinate axis across `g`) of

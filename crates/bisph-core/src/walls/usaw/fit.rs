@@ -156,7 +156,17 @@ pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relax
     };
     let depth = |p: V| surface - p.dot(up);
     let step = |_: V, r: V| r * -diffusion;
-    shift_until_still(x, dx, depth, support, max_iterations, measure, step)
+    let crosses = |from: V, to: V| path_crosses(elements, &element_grid, from, to);
+    shift_until_still(
+        x,
+        dx,
+        depth,
+        support,
+        max_iterations,
+        measure,
+        step,
+        crosses,
+    )
 }
 
 /// Second stage of [`relax_positions`], for still water: shifts the fluid particles `x` along
@@ -235,12 +245,39 @@ pub fn balance_positions<V: Vector>(
         let pa = p_at(y).max(0.0);
         a * (0.5 * kernel.h * kernel.h / (2.0 * pa / density(pa) + g * kernel.h))
     };
-    shift_until_still(x, dx, depth, support, max_iterations, accelerations, step)
+    let crosses = |from: V, to: V| path_crosses(elements, &grid, from, to);
+    shift_until_still(
+        x,
+        dx,
+        depth,
+        support,
+        max_iterations,
+        accelerations,
+        step,
+        crosses,
+    )
+}
+
+/// `true` when the straight path from `from` to `to` touches a wall element (`grid` holds the
+/// element centres, with cells at least `max_reach` wide).
+fn path_crosses<V: Vector>(
+    elements: &BoundaryElements<V>,
+    grid: &CellGrid<V>,
+    from: V,
+    to: V,
+) -> bool {
+    let reach = (to - from).length() + elements.max_reach;
+    let mut hit = false;
+    grid.for_each_sparse_neighbour(from, &elements.centre, reach, |k, _, _| {
+        hit = hit || crate::bi::path_crosses_element(from, to, elements.current_corners(k));
+    });
+    hit
 }
 
 /// The iteration of [`relax_positions`] and [`balance_positions`]: evaluates the field
 /// `field(x)` (a residual or an acceleration), shifts each particle by `step(x_a, f_a)`, at
-/// most `0.1 dx`, until no particle moves by more than `1e-6 dx` or `max_iterations`; reports
+/// most `0.1 dx` and never across a wall (`crosses(from, to)`: a shift whose path touches a
+/// wall is halved until it does not, or dropped after 8 halvings), until no particle moves by more than `1e-6 dx` or `max_iterations`; reports
 /// the largest `|f|` before and after, over all particles and over those deeper than `support`
 /// (`depth(x_a)` below the surface).
 fn shift_until_still<V: Vector>(
@@ -251,6 +288,7 @@ fn shift_until_still<V: Vector>(
     max_iterations: usize,
     field: impl Fn(&[V]) -> Vec<V>,
     step: impl Fn(V, V) -> V,
+    crosses: impl Fn(V, V) -> bool,
 ) -> Relaxation {
     let largest = |x: &[V], f: &[V]| {
         let (mut all, mut deep) = (0.0f64, 0.0f64);
@@ -273,6 +311,12 @@ fn shift_until_still<V: Vector>(
             let l = shift.length();
             if l > cap {
                 shift = shift * (cap / l);
+            }
+            for halvings in 0..=8 {
+                if !crosses(*p, *p + shift) {
+                    break;
+                }
+                shift = if halvings < 8 { shift * 0.5 } else { V::ZERO };
             }
             *p += shift;
             moved = moved.max(shift.length());
