@@ -5,9 +5,11 @@ use crate::case::dim::CaseDim;
 use crate::case::fill::{block_points, relax_for_usaw};
 
 use crate::case::error::CaseError;
-use crate::case::schema::LoadedCase;
-use crate::case::schema::ToleranceReference;
-use crate::case::schema::{Case, FluidBlock, InitialPressure};
+use crate::case::schema::{
+    BoundaryName, BoundaryQuadratureName, Case, ContinuityName, DiffusionName, EosName, FluidBlock,
+    FluxRuleName, InitialPressure, IntegratorName, LoadedCase, MassRule, ShepardName,
+    ToleranceReference, UsawGammaName, WallInterpolationName,
+};
 use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::geometry::ElementShape;
 use bisph_core::probes::{Probe, ProbeKind};
@@ -23,12 +25,12 @@ use std::ops::Range;
 pub fn eos_of(case: &Case) -> Eos {
     let f = &case.fluid;
     match case.eos_name() {
-        crate::case::schema::EosName::Linear => Eos::Linear {
+        EosName::Linear => Eos::Linear {
             rho0: f.density,
             c0: f.sound_speed,
             p0: f.background_pressure,
         },
-        crate::case::schema::EosName::Tait => Eos::Tait {
+        EosName::Tait => Eos::Tait {
             rho0: f.density,
             c0: f.sound_speed,
             p0: f.background_pressure,
@@ -65,7 +67,63 @@ pub fn build_simulation_with_layout<V: CaseDim>(
     let eos = eos_of(case);
     let gravity = V::from_slice(&case.fluid.gravity);
 
-    // Bodies: 0 = fixed walls, then the case's bodies in order.
+    let mut bodies = build_bodies::<V>(case);
+    let (elements, mut stretch, body_surfaces) = build_walls::<V>(loaded, &mut layout)?;
+    free_bodies::<V>(loaded, &mut bodies, &body_surfaces, gravity, &elements)?;
+    set_pistons(loaded, &mut bodies, &elements, &mut stretch)?;
+    let fluid = build_fluid(loaded, &kernel, &eos, gravity, &elements, &mut layout)?;
+    let (domain_min, domain_max) = domain_box(case, &fluid, &elements, h);
+    let periodicity = periodicity_of::<V>(loaded, &kernel)?;
+    let probes = build_probes::<V>(case);
+
+    let config = SimConfig {
+        kernel,
+        eos,
+        gravity,
+        delta: case.delta(),
+        delta_hydrostatic: case.fluid.delta_hydrostatic,
+        courant: case.time.courant,
+        fixed_dt: case.time.dt,
+        min_dt: case.time.min_dt.unwrap_or(1e-6 * h / eos.c0()),
+        domain_min,
+        domain_max,
+        wall_model: wall_model_of(case),
+        diffusion: diffusion_of(case),
+        density_power: if case.boundary == BoundaryName::Usaw {
+            case.usaw.density_power
+        } else {
+            0
+        },
+        particle_spacing: case.resolution.dx,
+        summation_density: case.usaw.continuity == ContinuityName::Summation,
+        reorder_interval: 1,
+        neighbour_skin: case.time.neighbour_skin,
+        elastic_bounce: case.elastic_bounce,
+        periodicity,
+        viscosity: bisph_core::terms::Viscosity {
+            nu: case.kinematic_viscosity(),
+            min_wall_distance: 0.5 * dx,
+        },
+        flux: flux_control_of(case, domain_min, domain_max),
+        integrator: integrator_of(case, &fluid, &eos, gravity),
+    };
+    let mut walls = Walls::new(elements, bodies, kernel.support);
+    walls.stretch = stretch;
+    let mut sim = Simulation::new(config, fluid, walls, probes);
+    if case.boundary == BoundaryName::Usaw
+        && case
+            .fluid_block
+            .iter()
+            .all(|b| case.mass_rule(b) == MassRule::Initial)
+    {
+        sim.vertex_masses_from_density();
+    }
+    Ok((sim, layout))
+}
+
+/// The bodies of a case: 0 = the fixed walls, then the case's bodies in order, with their
+/// prescribed motion or piston (a piston's outside force is set by [`set_pistons`]).
+fn build_bodies<V: CaseDim>(case: &Case) -> Vec<Body<V>> {
     let mut bodies = vec![Body::fixed("walls")];
     for b in &case.body {
         let motion = match &b.motion {
@@ -99,7 +157,7 @@ pub fn build_simulation_with_layout<V: CaseDim>(
                 Motion::Piston(Piston {
                     axis: axis / axis.length(),
                     mass: p.mass,
-                    outside_force: 0.0, // outside pressure times area, set below
+                    outside_force: 0.0, // outside pressure times area, set by set_pistons
                     position: 0.0,
                     velocity: p.initial_velocity,
                     acceleration: 0.0,
@@ -114,11 +172,28 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             motion,
         });
     }
+    bodies
+}
 
+/// The boundary elements of every wall (their ranges recorded in `layout`), the stretching
+/// groups, and the closed surfaces of the mesh walls that belong to bodies.
+#[allow(clippy::type_complexity)]
+fn build_walls<V: CaseDim>(
+    loaded: &LoadedCase,
+    layout: &mut Layout,
+) -> Result<
+    (
+        BoundaryElements<V>,
+        Vec<Stretch>,
+        Vec<(usize, bisph_core::surface::Surface)>,
+    ),
+    CaseError,
+> {
+    let case = &loaded.case;
     let mut elements = BoundaryElements::default();
     let mut stretch: Vec<Stretch> = Vec::new();
     let mut body_surfaces: Vec<(usize, bisph_core::surface::Surface)> = Vec::new();
-    let element_size = dx * case.resolution.element_over_dx;
+    let element_size = case.resolution.dx * case.resolution.element_over_dx;
     for (k, w) in case.wall.iter().enumerate() {
         let element_size = w.element_size.unwrap_or(element_size);
         let body = match &w.body {
@@ -163,9 +238,18 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             });
         }
     }
-    free_bodies::<V>(loaded, &mut bodies, &body_surfaces, gravity, &elements)?;
-    // Pistons: outside force = outside pressure x piston area; reference face along the axis.
-    for (k, b) in case.body.iter().enumerate() {
+    Ok((elements, stretch, body_surfaces))
+}
+
+/// Sets each piston's outside force (outside pressure times the piston's area) and the
+/// reference face of the walls stretching with it.
+fn set_pistons<V: CaseDim>(
+    loaded: &LoadedCase,
+    bodies: &mut [Body<V>],
+    elements: &BoundaryElements<V>,
+    stretch: &mut [Stretch],
+) -> Result<(), CaseError> {
+    for (k, b) in loaded.case.body.iter().enumerate() {
         let (Some(spec), Motion::Piston(p)) = (&b.piston, &mut bodies[k + 1].motion) else {
             continue;
         };
@@ -195,104 +279,147 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             }
         }
     }
+    Ok(())
+}
 
+/// The fluid particles of every block (their ranges recorded in `layout`).
+fn build_fluid<V: CaseDim>(
+    loaded: &LoadedCase,
+    kernel: &Wendland,
+    eos: &Eos,
+    gravity: V,
+    elements: &BoundaryElements<V>,
+    layout: &mut Layout,
+) -> Result<Fluid<V>, CaseError> {
     let mut fluid = Fluid::default();
-    let g = gravity.length();
-    for (k, block) in case.fluid_block.iter().enumerate() {
-        let key = format!("fluid_block[{k}]");
-        if block.shape == "polyline" {
-            return Err(loaded.error(
-                &format!("{key}.shape"),
-                "a fluid block must be a closed \"box\" or \"polygon\"",
-            ));
-        }
-        if block.solid {
-            return Err(loaded.error(
-                &format!("{key}.solid"),
-                "solid blocks are packed by `bisph pack` only; `bisph run` moves fluid",
-            ));
-        }
-        let block_dx = block.dx.unwrap_or(dx);
-        let mass = eos.rho0() * block_dx.powi(V::DIM as i32);
-        let points = block_points::<V>(loaded, k, block_dx)?;
-        if points.is_empty() {
-            return Err(loaded.error(
-                &key,
-                format!("no lattice point of spacing dx = {block_dx} fits in this block"),
-            ));
-        }
-        let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
-        let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
-        let surface = block.surface.unwrap_or_else(|| {
-            if matches!(block.shape.as_str(), "box" | "polygon")
-                && crate::case::regions::transform_of(&block.shape_spec()).is_identity()
-            {
-                block_top(block, gravity, g)
-            } else {
-                // Shapes from files: the top particle plus half a spacing.
-                points
-                    .iter()
-                    .map(|&r| height(r))
-                    .fold(f64::NEG_INFINITY, f64::max)
-                    + 0.5 * block_dx
-            }
-        });
-        let mut points = points;
-        layout.blocks.push(fluid.len()..fluid.len() + points.len());
-        if case.fills_for_usaw(block) {
-            relax_for_usaw(
-                &kernel,
-                block_dx,
-                &mut points,
-                &elements,
-                gravity,
-                surface,
-                &eos,
-            );
-        }
-        // Uniform by default where gravity runs along a periodic axis (a driven channel).
-        let hydrostatic = match &block.pressure {
-            None => g > 0.0 && crate::case::check::gravity_along_periodic_axis(case).is_none(),
-            Some(InitialPressure::Named(_)) => true,
-            Some(InitialPressure::Value(_)) => false,
-        };
-        // "hydrostatic-eos": dp/dd = rho(p) g with the equation of state (a fluid that starts
-        // compressed in equilibrium); "hydrostatic": rho0 g d.
-        let exact_hydrostatic =
-            matches!(&block.pressure, Some(InitialPressure::Named(n)) if n == "hydrostatic-eos");
-        for r in points {
-            let p = match &block.pressure {
-                Some(InitialPressure::Value(p)) => *p,
-                _ if hydrostatic => {
-                    let taper = block.pressure_taper.as_ref().map_or(1.0, |tp| {
-                        let s = ((r.get(tp.axis) - tp.start) / tp.length).clamp(0.0, 1.0);
-                        (0.5 * std::f64::consts::PI * s).cos()
-                    });
-                    let depth = (surface - height(r)).max(0.0);
-                    let hydrostatic = if exact_hydrostatic {
-                        eos.hydrostatic_pressure(g, depth)
-                    } else {
-                        eos.rho0() * g * depth
-                    };
-                    eos_background(&eos) + taper * hydrostatic
-                }
-                _ => eos_background(&eos),
-            };
-            let Some(rho) = eos.density(p) else {
-                return Err(loaded.error(
-                    &format!("{key}.pressure"),
-                    format!("no density gives the pressure {p} Pa with this equation of state"),
-                ));
-            };
-            let mass = match case.mass_rule(block) {
-                crate::case::schema::MassRule::Reference => mass,
-                crate::case::schema::MassRule::Initial => rho * dx.powi(V::DIM as i32),
-            };
-            fluid.push(r, velocity, rho, mass, p);
-        }
+    for k in 0..loaded.case.fluid_block.len() {
+        push_block(
+            loaded, k, kernel, eos, gravity, elements, layout, &mut fluid,
+        )?;
     }
+    Ok(fluid)
+}
 
-    let (domain_min, domain_max) = match &case.domain {
+/// Adds the particles of fluid block `k` to `fluid`: on its lattice (relaxed for usaw walls
+/// where it asks), with its velocity, initial pressure, density and mass.
+#[allow(clippy::too_many_arguments)]
+fn push_block<V: CaseDim>(
+    loaded: &LoadedCase,
+    k: usize,
+    kernel: &Wendland,
+    eos: &Eos,
+    gravity: V,
+    elements: &BoundaryElements<V>,
+    layout: &mut Layout,
+    fluid: &mut Fluid<V>,
+) -> Result<(), CaseError> {
+    let case = &loaded.case;
+    let block = &case.fluid_block[k];
+    let dx = case.resolution.dx;
+    let g = gravity.length();
+    let key = format!("fluid_block[{k}]");
+    if block.shape == "polyline" {
+        return Err(loaded.error(
+            &format!("{key}.shape"),
+            "a fluid block must be a closed \"box\" or \"polygon\"",
+        ));
+    }
+    if block.solid {
+        return Err(loaded.error(
+            &format!("{key}.solid"),
+            "solid blocks are packed by `bisph pack` only; `bisph run` moves fluid",
+        ));
+    }
+    let block_dx = block.dx.unwrap_or(dx);
+    let mass = eos.rho0() * block_dx.powi(V::DIM as i32);
+    let points = block_points::<V>(loaded, k, block_dx)?;
+    if points.is_empty() {
+        return Err(loaded.error(
+            &key,
+            format!("no lattice point of spacing dx = {block_dx} fits in this block"),
+        ));
+    }
+    let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
+    let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
+    let surface = block.surface.unwrap_or_else(|| {
+        if matches!(block.shape.as_str(), "box" | "polygon")
+            && crate::case::regions::transform_of(&block.shape_spec()).is_identity()
+        {
+            block_top(block, gravity, g)
+        } else {
+            // Shapes from files: the top particle plus half a spacing.
+            points
+                .iter()
+                .map(|&r| height(r))
+                .fold(f64::NEG_INFINITY, f64::max)
+                + 0.5 * block_dx
+        }
+    });
+    let mut points = points;
+    layout.blocks.push(fluid.len()..fluid.len() + points.len());
+    if case.fills_for_usaw(block) {
+        relax_for_usaw(
+            kernel,
+            block_dx,
+            &mut points,
+            elements,
+            gravity,
+            surface,
+            eos,
+        );
+    }
+    // Uniform by default where gravity runs along a periodic axis (a driven channel).
+    let hydrostatic = match &block.pressure {
+        None => g > 0.0 && crate::case::check::gravity_along_periodic_axis(case).is_none(),
+        Some(InitialPressure::Named(_)) => true,
+        Some(InitialPressure::Value(_)) => false,
+    };
+    // "hydrostatic-eos": dp/dd = rho(p) g with the equation of state (a fluid that starts
+    // compressed in equilibrium); "hydrostatic": rho0 g d.
+    let exact_hydrostatic =
+        matches!(&block.pressure, Some(InitialPressure::Named(n)) if n == "hydrostatic-eos");
+    for r in points {
+        let p = match &block.pressure {
+            Some(InitialPressure::Value(p)) => *p,
+            _ if hydrostatic => {
+                let taper = block.pressure_taper.as_ref().map_or(1.0, |tp| {
+                    let s = ((r.get(tp.axis) - tp.start) / tp.length).clamp(0.0, 1.0);
+                    (0.5 * std::f64::consts::PI * s).cos()
+                });
+                let depth = (surface - height(r)).max(0.0);
+                let hydrostatic = if exact_hydrostatic {
+                    eos.hydrostatic_pressure(g, depth)
+                } else {
+                    eos.rho0() * g * depth
+                };
+                eos_background(eos) + taper * hydrostatic
+            }
+            _ => eos_background(eos),
+        };
+        let Some(rho) = eos.density(p) else {
+            return Err(loaded.error(
+                &format!("{key}.pressure"),
+                format!("no density gives the pressure {p} Pa with this equation of state"),
+            ));
+        };
+        let mass = match case.mass_rule(block) {
+            MassRule::Reference => mass,
+            MassRule::Initial => rho * dx.powi(V::DIM as i32),
+        };
+        fluid.push(r, velocity, rho, mass, p);
+    }
+    Ok(())
+}
+
+/// The domain's corners: `[domain]`, or the box around the fluid and the walls with a margin
+/// of a tenth of its extent plus two smoothing lengths.
+fn domain_box<V: CaseDim>(
+    case: &Case,
+    fluid: &Fluid<V>,
+    elements: &BoundaryElements<V>,
+    h: f64,
+) -> (V, V) {
+    match &case.domain {
         Some(d) => (V::from_slice(&d.min), V::from_slice(&d.max)),
         None => {
             let mut lo = fluid.position[0];
@@ -311,10 +438,16 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             }
             (lo - margin, hi + margin)
         }
-    };
+    }
+}
 
+/// The periodic axes of `[domain]`, each period at least three kernel supports.
+fn periodicity_of<V: CaseDim>(
+    loaded: &LoadedCase,
+    kernel: &Wendland,
+) -> Result<bisph_core::neighbours::Periodicity<V>, CaseError> {
     let mut periodicity = bisph_core::neighbours::Periodicity::<V>::none();
-    if let Some(d) = &case.domain {
+    if let Some(d) = &loaded.case.domain {
         for axis in d.periodic_axes() {
             periodicity.min.set(axis, d.min[axis]);
             periodicity.length.set(axis, d.max[axis] - d.min[axis]);
@@ -326,9 +459,12 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             "every period must hold at least three kernel supports",
         ));
     }
+    Ok(periodicity)
+}
 
-    let probes = case
-        .probe
+/// The probes of a case.
+fn build_probes<V: CaseDim>(case: &Case) -> Vec<Probe<V>> {
+    case.probe
         .iter()
         .map(|p| Probe {
             name: p.name.clone(),
@@ -339,98 +475,81 @@ pub fn build_simulation_with_layout<V: CaseDim>(
             },
             position: V::from_slice(&p.position),
         })
-        .collect();
+        .collect()
+}
 
-    let config = SimConfig {
-        kernel,
-        eos,
-        gravity,
-        delta: case.delta(),
-        delta_hydrostatic: case.fluid.delta_hydrostatic,
-        courant: case.time.courant,
-        fixed_dt: case.time.dt,
-        min_dt: case.time.min_dt.unwrap_or(1e-6 * h / eos.c0()),
-        domain_min,
-        domain_max,
-        wall_model: match case.boundary {
-            crate::case::schema::BoundaryName::Energy => WallModelChoice::Energy,
-            crate::case::schema::BoundaryName::Bi => WallModelChoice::ShepardBi(
-                match case.shepard {
-                    crate::case::schema::ShepardName::Discrete => ShepardKind::Discrete,
-                    crate::case::schema::ShepardName::Geometric => ShepardKind::Geometric,
-                    crate::case::schema::ShepardName::Integrated => ShepardKind::Integrated,
-                },
-                match case.boundary_quadrature() {
-                    crate::case::schema::BoundaryQuadratureName::Centre => {
-                        BoundaryQuadrature::Centre
-                    }
-                    crate::case::schema::BoundaryQuadratureName::Exact => BoundaryQuadrature::Exact,
-                },
-            ),
-            crate::case::schema::BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
-                interpolation: match case.usaw.wall_interpolation {
-                    crate::case::schema::WallInterpolationName::Shepard => {
-                        WallInterpolation::Shepard
-                    }
-                    crate::case::schema::WallInterpolationName::Neumann => {
-                        WallInterpolation::Neumann
-                    }
-                    crate::case::schema::WallInterpolationName::Hydrostatic => {
-                        WallInterpolation::Hydrostatic
-                    }
-                },
-                geometric_gamma: case.usaw.gamma == crate::case::schema::UsawGammaName::Geometric,
-                no_wall_tension: !case.usaw.wall_tension,
-            }),
-        },
-        diffusion: match case.fluid.diffusion {
-            crate::case::schema::DiffusionName::Delta => DiffusionChoice::Delta,
-            crate::case::schema::DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
-                eta: case.fluid.eta,
+/// The wall model of a case with its options.
+fn wall_model_of(case: &Case) -> WallModelChoice {
+    match case.boundary {
+        BoundaryName::Energy => WallModelChoice::Energy,
+        BoundaryName::Bi => WallModelChoice::ShepardBi(
+            match case.shepard {
+                ShepardName::Discrete => ShepardKind::Discrete,
+                ShepardName::Geometric => ShepardKind::Geometric,
+                ShepardName::Integrated => ShepardKind::Integrated,
             },
-            crate::case::schema::DiffusionName::Ferrari => DiffusionChoice::Ferrari {
-                coefficient: case.fluid.ferrari_coefficient,
+            match case.boundary_quadrature() {
+                BoundaryQuadratureName::Centre => BoundaryQuadrature::Centre,
+                BoundaryQuadratureName::Exact => BoundaryQuadrature::Exact,
             },
-        },
-        density_power: if case.boundary == crate::case::schema::BoundaryName::Usaw {
-            case.usaw.density_power
-        } else {
-            0
-        },
-        particle_spacing: case.resolution.dx,
-        summation_density: case.usaw.continuity == crate::case::schema::ContinuityName::Summation,
-        reorder_interval: 1,
-        neighbour_skin: case.time.neighbour_skin,
-        elastic_bounce: case.elastic_bounce,
-        periodicity,
-        viscosity: bisph_core::terms::Viscosity {
-            nu: case.kinematic_viscosity(),
-            min_wall_distance: 0.5 * dx,
-        },
-        flux: case.flux.as_ref().map(|f| {
-            let direction = V::from_slice(&f.direction);
-            let centre = (domain_min + domain_max) * 0.5;
-            bisph_core::forcing::FluxControl {
-                direction: direction / direction.length(),
-                target_velocity: f.flux / f.area,
-                area: f.area,
-                slice_point: f.slice_point.as_deref().map_or(centre, V::from_slice),
-                slice_width: f.slice_width.unwrap_or(2.0 * dx),
-                rule: match f.rule {
-                    crate::case::schema::FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
-                    crate::case::schema::FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
-                },
-            }
+        ),
+        BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
+            interpolation: match case.usaw.wall_interpolation {
+                WallInterpolationName::Shepard => WallInterpolation::Shepard,
+                WallInterpolationName::Neumann => WallInterpolation::Neumann,
+                WallInterpolationName::Hydrostatic => WallInterpolation::Hydrostatic,
+            },
+            geometric_gamma: case.usaw.gamma == UsawGammaName::Geometric,
+            no_wall_tension: !case.usaw.wall_tension,
         }),
-        integrator: Integrator::Verlet,
-        // set below, once the initial energies are known
-    };
-    let integrator = match case.time.integrator {
-        crate::case::schema::IntegratorName::Verlet => Integrator::Verlet,
-        crate::case::schema::IntegratorName::Midpoint => {
+    }
+}
+
+/// The density diffusion of a case with its coefficient.
+fn diffusion_of(case: &Case) -> DiffusionChoice {
+    match case.fluid.diffusion {
+        DiffusionName::Delta => DiffusionChoice::Delta,
+        DiffusionName::Mayrhofer => DiffusionChoice::Mayrhofer {
+            eta: case.fluid.eta,
+        },
+        DiffusionName::Ferrari => DiffusionChoice::Ferrari {
+            coefficient: case.fluid.ferrari_coefficient,
+        },
+    }
+}
+
+/// The flux control of `[flux]`, its slice through the domain's centre by default.
+fn flux_control_of<V: CaseDim>(
+    case: &Case,
+    domain_min: V,
+    domain_max: V,
+) -> Option<bisph_core::forcing::FluxControl<V>> {
+    case.flux.as_ref().map(|f| {
+        let direction = V::from_slice(&f.direction);
+        let centre = (domain_min + domain_max) * 0.5;
+        bisph_core::forcing::FluxControl {
+            direction: direction / direction.length(),
+            target_velocity: f.flux / f.area,
+            area: f.area,
+            slice_point: f.slice_point.as_deref().map_or(centre, V::from_slice),
+            slice_width: f.slice_width.unwrap_or(2.0 * case.resolution.dx),
+            rule: match f.rule {
+                FluxRuleName::Eq63 => bisph_core::forcing::FluxRule::Eq63,
+                FluxRuleName::Eq58 => bisph_core::forcing::FluxRule::Eq58,
+            },
+        }
+    })
+}
+
+/// The time integrator of a case; a relative midpoint tolerance is scaled by the initial
+/// energy it refers to.
+fn integrator_of<V: CaseDim>(case: &Case, fluid: &Fluid<V>, eos: &Eos, gravity: V) -> Integrator {
+    match case.time.integrator {
+        IntegratorName::Verlet => Integrator::Verlet,
+        IntegratorName::Midpoint => {
             let m = &case.midpoint;
-            let (kinetic, compressible, _) = fluid_energies(&fluid, &eos, gravity);
-            let potential = energy_scale(&fluid, &eos, gravity) - kinetic - compressible.abs();
+            let (kinetic, compressible, _) = fluid_energies(fluid, eos, gravity);
+            let potential = energy_scale(fluid, eos, gravity) - kinetic - compressible.abs();
             let reference = match m.tolerance_reference {
                 ToleranceReference::Absolute => 1.0,
                 ToleranceReference::Potential => potential,
@@ -446,23 +565,7 @@ pub fn build_simulation_with_layout<V: CaseDim>(
                 initial_relaxation: m.initial_relaxation,
             })
         }
-    };
-    let config = SimConfig {
-        integrator,
-        ..config
-    };
-    let mut walls = Walls::new(elements, bodies, kernel.support);
-    walls.stretch = stretch;
-    let mut sim = Simulation::new(config, fluid, walls, probes);
-    if case.boundary == crate::case::schema::BoundaryName::Usaw
-        && case
-            .fluid_block
-            .iter()
-            .all(|b| case.mass_rule(b) == crate::case::schema::MassRule::Initial)
-    {
-        sim.vertex_masses_from_density();
     }
-    Ok((sim, layout))
 }
 
 /// The elements of wall `k`, about `element_size` across, normals out of the fluid.

@@ -8,28 +8,54 @@ use crate::case::schema::*;
 /// Checks values for physical sense and consistency; errors name the key and the allowed range.
 pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
     let c = &loaded.case;
-    let e = |key: &str, msg: String| Err(loaded.error(key, msg));
     if c.dim != 2 && c.dim != 3 {
-        return e("dim", format!("expected 2 or 3, found {}", c.dim));
+        return Err(loaded.error("dim", format!("expected 2 or 3, found {}", c.dim)));
     }
-    let d = c.dim as usize;
-    let positive = |key: &str, v: f64| -> Result<(), CaseError> {
-        if v > 0.0 && v.is_finite() {
-            Ok(())
-        } else {
-            Err(loaded.error(key, format!("expected a positive number, found {v}")))
-        }
-    };
-    positive("fluid.density", c.fluid.density)?;
-    positive("fluid.sound_speed", c.fluid.sound_speed)?;
-    positive("resolution.dx", c.resolution.dx)?;
-    positive("time.end", c.time.end)?;
-    positive("resolution.element_over_dx", c.resolution.element_over_dx)?;
+    check_scales(loaded)?;
+    check_time(loaded)?;
+    check_midpoint(loaded)?;
+    check_viscosity(loaded)?;
+    check_flux(loaded)?;
+    check_diffusion(loaded)?;
+    check_wall_model(loaded)?;
+    check_forces_and_output(loaded)?;
+    check_fluid_blocks(loaded)?;
+    check_walls(loaded)?;
+    check_bodies(loaded)?;
+    check_domain(loaded)?;
+    check_pack(loaded)?;
+    check_reliability(loaded)?;
+    check_settle(loaded)?;
+    check_probes(loaded)
+}
+
+/// A positive, finite number at `key`.
+fn positive(loaded: &LoadedCase, key: &str, v: f64) -> Result<(), CaseError> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(loaded.error(key, format!("expected a positive number, found {v}")))
+    }
+}
+
+/// Checks the fluid's density, sound speed and Tait exponent, the spacing against the
+/// domain, the smoothing length and the end time.
+fn check_scales(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    positive(loaded, "fluid.density", c.fluid.density)?;
+    positive(loaded, "fluid.sound_speed", c.fluid.sound_speed)?;
+    positive(loaded, "resolution.dx", c.resolution.dx)?;
+    positive(loaded, "time.end", c.time.end)?;
+    positive(
+        loaded,
+        "resolution.element_over_dx",
+        c.resolution.element_over_dx,
+    )?;
     if c.fluid.tait_exponent.is_nan() || c.fluid.tait_exponent <= 1.0 {
-        return e(
+        return Err(loaded.error(
             "fluid.tait_exponent",
             format!("expected a number above 1, found {}", c.fluid.tait_exponent),
-        );
+        ));
     }
     if let Some(dom) = &c.domain {
         if let Some((k, w)) = dom
@@ -40,57 +66,69 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             .enumerate()
             .find(|(_, w)| *w < c.resolution.dx)
         {
-            return e(
+            return Err(loaded.error(
                 "resolution.dx",
                 format!(
                     "expected dx at most the domain's extent {w} in direction {k}, found {}",
                     c.resolution.dx
                 ),
-            );
+            ));
         }
     }
     if !(1.0..=4.0).contains(&c.resolution.h_over_dx) {
-        return e(
+        return Err(loaded.error(
             "resolution.h_over_dx",
             format!(
                 "expected a value in [1, 4], found {}",
                 c.resolution.h_over_dx
             ),
-        );
+        ));
     }
-    if !(c.time.neighbour_skin >= 0.0 && c.time.neighbour_skin <= 1.0) {
-        return e(
+    Ok(())
+}
+
+/// Checks `[time]`: the neighbour skin, the Courant number and the fixed and least steps.
+fn check_time(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let t = &loaded.case.time;
+    if !(t.neighbour_skin >= 0.0 && t.neighbour_skin <= 1.0) {
+        return Err(loaded.error(
             "time.neighbour_skin",
             format!(
                 "expected a fraction of the kernel support in [0, 1], found {}",
-                c.time.neighbour_skin
+                t.neighbour_skin
             ),
-        );
+        ));
     }
-    if !(c.time.courant > 0.0 && c.time.courant <= 1.0) {
-        return e(
+    if !(t.courant > 0.0 && t.courant <= 1.0) {
+        return Err(loaded.error(
             "time.courant",
-            format!("expected a value in (0, 1], found {}", c.time.courant),
-        );
+            format!("expected a value in (0, 1], found {}", t.courant),
+        ));
     }
-    if let Some(dt) = c.time.dt {
-        positive("time.dt", dt)?;
+    if let Some(dt) = t.dt {
+        positive(loaded, "time.dt", dt)?;
     }
-    if let Some(dt) = c.time.min_dt {
-        positive("time.min_dt", dt)?;
+    if let Some(dt) = t.min_dt {
+        positive(loaded, "time.min_dt", dt)?;
     }
-    let mp = &c.midpoint;
+    Ok(())
+}
+
+/// Checks `[midpoint]`: iteration count, tolerance, relaxation fractions and the reference
+/// energy a `"given"` tolerance needs.
+fn check_midpoint(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let mp = &loaded.case.midpoint;
     if mp.max_iterations == 0 || mp.max_iterations > 1000 {
-        return e(
+        return Err(loaded.error(
             "midpoint.max_iterations",
             format!("expected 1 to 1000, found {}", mp.max_iterations),
-        );
+        ));
     }
     if mp.tolerance.is_nan() || mp.tolerance < 0.0 {
-        return e(
+        return Err(loaded.error(
             "midpoint.tolerance",
             format!("expected zero or a positive number, found {}", mp.tolerance),
-        );
+        ));
     }
     for (key, v) in [
         ("midpoint.min_decrease", mp.min_decrease),
@@ -98,81 +136,110 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         ("midpoint.initial_relaxation", mp.initial_relaxation),
     ] {
         if !(0.0..1.0).contains(&v) {
-            return e(key, format!("expected a value in [0, 1), found {v}"));
+            return Err(loaded.error(key, format!("expected a value in [0, 1), found {v}")));
         }
     }
     if mp.tolerance_reference == ToleranceReference::Given && mp.reference_energy.is_none() {
-        return e(
+        return Err(loaded.error(
             "midpoint.reference_energy",
-            "missing: needed by tolerance_reference = \"given\"".into(),
-        );
+            "missing: needed by tolerance_reference = \"given\"",
+        ));
     }
+    Ok(())
+}
+
+/// Checks the delta-SPH coefficient, the artificial and the laminar viscosity.
+fn check_viscosity(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
     if !(c.delta() >= 0.0 && c.delta() <= 1.0) {
-        return e(
+        return Err(loaded.error(
             "fluid.delta",
             format!("expected a value in [0, 1], found {}", c.delta()),
-        );
+        ));
     }
     if !(c.artificial_viscosity() >= 0.0 && c.artificial_viscosity() <= 1.0) {
-        return e(
+        return Err(loaded.error(
             "fluid.artificial_viscosity",
             format!(
                 "expected a value in [0, 1], found {}",
                 c.artificial_viscosity()
             ),
-        );
+        ));
     }
     if !(c.fluid.viscosity >= 0.0 && c.fluid.viscosity.is_finite()) {
-        return e(
+        return Err(loaded.error(
             "fluid.viscosity",
             format!(
                 "expected zero or a positive kinematic viscosity, found {}",
                 c.fluid.viscosity
             ),
-        );
+        ));
     }
-    if let Some(f) = &c.flux {
-        if !f.flux.is_finite() {
-            return e("flux.flux", "expected a finite number".into());
-        }
-        positive("flux.area", f.area)?;
-        vector(loaded, "flux.direction", &f.direction, d)?;
-        if f.direction.iter().all(|x| *x == 0.0) {
-            return e("flux.direction", "expected a non-zero vector".into());
-        }
-        if let Some(p) = &f.slice_point {
-            vector(loaded, "flux.slice_point", p, d)?;
-        }
-        if let Some(w) = f.slice_width {
-            positive("flux.slice_width", w)?;
-        }
-        if c.domain.as_ref().is_none_or(|dom| dom.periodic.is_empty()) {
-            return e(
-                "flux",
-                "a flux-driven flow needs a periodic [domain] (domain.periodic)".into(),
-            );
-        }
+    Ok(())
+}
+
+/// Checks `[flux]`: a finite flux, a positive area, a non-zero direction, the slice, and a
+/// periodic domain to drive.
+fn check_flux(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
+    let Some(f) = &c.flux else {
+        return Ok(());
+    };
+    if !f.flux.is_finite() {
+        return Err(loaded.error("flux.flux", "expected a finite number"));
     }
-    if !(c.fluid.eta.is_finite() && c.fluid.eta > 0.0) {
-        return e(
+    positive(loaded, "flux.area", f.area)?;
+    vector(loaded, "flux.direction", &f.direction, d)?;
+    if f.direction.iter().all(|x| *x == 0.0) {
+        return Err(loaded.error("flux.direction", "expected a non-zero vector"));
+    }
+    if let Some(p) = &f.slice_point {
+        vector(loaded, "flux.slice_point", p, d)?;
+    }
+    if let Some(w) = f.slice_width {
+        positive(loaded, "flux.slice_width", w)?;
+    }
+    if c.domain.as_ref().is_none_or(|dom| dom.periodic.is_empty()) {
+        return Err(loaded.error(
+            "flux",
+            "a flux-driven flow needs a periodic [domain] (domain.periodic)",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the coefficients of Mayrhofer's and Ferrari's density diffusion.
+fn check_diffusion(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let f = &loaded.case.fluid;
+    if !(f.eta.is_finite() && f.eta > 0.0) {
+        return Err(loaded.error(
             "fluid.eta",
-            format!("expected a positive number, found {}", c.fluid.eta),
-        );
+            format!("expected a positive number, found {}", f.eta),
+        ));
     }
-    if !(c.fluid.ferrari_coefficient.is_finite() && c.fluid.ferrari_coefficient >= 0.0) {
-        return e(
+    if !(f.ferrari_coefficient.is_finite() && f.ferrari_coefficient >= 0.0) {
+        return Err(loaded.error(
             "fluid.ferrari_coefficient",
             format!(
                 "expected zero or a positive number, found {}",
-                c.fluid.ferrari_coefficient
+                f.ferrari_coefficient
             ),
-        );
+        ));
     }
+    Ok(())
+}
+
+/// Checks that the wall model's options fit together: `[usaw]` settings, the dimension of
+/// `usaw` walls and of the integrated gamma, `boundary_quadrature` with `bi` walls only, and
+/// fixed walls under an integrated gamma.
+fn check_wall_model(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
     if c.usaw.density_power > 1 {
-        return e(
+        return Err(loaded.error(
             "usaw.density_power",
             format!("expected 0 or 1, found {}", c.usaw.density_power),
-        );
+        ));
     }
     let integrated = c.boundary == BoundaryName::Usaw && c.usaw.gamma == UsawGammaName::Integrated
         || c.boundary == BoundaryName::Bi && c.shepard == ShepardName::Integrated;
@@ -180,148 +247,188 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         && c.usaw.continuity == ContinuityName::Summation
         && c.time.integrator != IntegratorName::Verlet
     {
-        return e(
+        return Err(loaded.error(
             "usaw.continuity",
-            "\"summation\" needs time.integrator = \"verlet\"".into(),
-        );
+            "\"summation\" needs time.integrator = \"verlet\"",
+        ));
     }
     if c.boundary == BoundaryName::Usaw && c.dim != 2 {
-        return e(
+        return Err(loaded.error(
             "boundary",
             format!("\"usaw\" walls are 2-D only, found dim = {}", c.dim),
-        );
+        ));
     }
     if c.boundary_quadrature.is_some() && c.boundary != BoundaryName::Bi {
-        return e(
+        return Err(loaded.error(
             "boundary_quadrature",
             format!(
                 "applies to boundary = \"bi\" only, found boundary = {:?}",
                 c.boundary
             )
             .to_lowercase(),
-        );
+        ));
     }
     if c.shepard == ShepardName::Integrated && c.dim != 2 {
-        return e(
+        return Err(loaded.error(
             "shepard",
             format!("\"integrated\" gamma is 2-D only, found dim = {}", c.dim),
-        );
+        ));
     }
     let moving = |b: &BodySpec| b.motion.is_some() || b.piston.is_some() || b.free.is_some();
     if integrated && c.body.iter().any(moving) {
-        return e(
+        return Err(loaded.error(
             "body",
-            "the integrated gamma (paper 3, eq 4) is built for fixed walls: use usaw.gamma = \"geometric\" or shepard = \"geometric\" with moving bodies".into(),
-        );
+            "the integrated gamma (paper 3, eq 4) is built for fixed walls: use usaw.gamma = \"geometric\" or shepard = \"geometric\" with moving bodies",
+        ));
     }
+    Ok(())
+}
+
+/// Checks the background pressure, the gravity vector and the output intervals.
+fn check_forces_and_output(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
     if !c.fluid.background_pressure.is_finite() {
-        return e(
-            "fluid.background_pressure",
-            "expected a finite number".into(),
-        );
+        return Err(loaded.error("fluid.background_pressure", "expected a finite number"));
     }
     if !c.fluid.gravity.is_empty() {
-        vector(loaded, "fluid.gravity", &c.fluid.gravity, d)?;
+        vector(loaded, "fluid.gravity", &c.fluid.gravity, c.dim as usize)?;
     }
     if c.output.vtk_interval < 0.0 || c.output.series_interval < 0.0 {
-        return e("output", "intervals must be zero or positive".into());
+        return Err(loaded.error("output", "intervals must be zero or positive"));
     }
-    if c.fluid_block.is_empty() {
-        return e(
+    Ok(())
+}
+
+/// Checks `[[fluid_block]]`: at least one, each with its shape, holes, fill, spacing,
+/// velocity and initial pressure.
+fn check_fluid_blocks(loaded: &LoadedCase) -> Result<(), CaseError> {
+    if loaded.case.fluid_block.is_empty() {
+        return Err(loaded.error(
             "fluid_block",
-            "expected at least one [[fluid_block]]: the case has no fluid".into(),
-        );
+            "expected at least one [[fluid_block]]: the case has no fluid",
+        ));
     }
-    for (k, b) in c.fluid_block.iter().enumerate() {
-        let key = format!("fluid_block[{k}]");
-        if b.shape == "walls" {
-            check_walls_block(loaded, k)?;
-        } else {
-            check_shape(loaded, &key, &b.shape_spec(), d, true)?;
-            if b.level.is_some() || b.clearance.is_some() {
-                return e(
-                    &key,
-                    "`level` and `clearance` belong to a shape = \"walls\" block".into(),
-                );
-            }
-        }
-        for (m, hole) in b.hole.iter().enumerate() {
-            let hkey = format!("{key}.hole[{m}]");
-            if hole.shape == "particles" {
-                return e(
-                    &format!("{hkey}.shape"),
-                    "a hole must be a shape, not \"particles\"".into(),
-                );
-            }
-            check_shape(loaded, &hkey, hole, d, false)?;
-        }
-        if let Some(fill) = &b.fill {
-            if fill != "lattice" && fill != "bipi" && fill != "usaw" {
-                return e(
-                    &format!("{key}.fill"),
-                    format!("expected \"lattice\", \"bipi\" or \"usaw\", found \"{fill}\""),
-                );
-            }
-            if fill == "usaw"
-                && (c.boundary != BoundaryName::Usaw || d != 2 || b.shape == "particles")
-            {
-                return e(
-                    &format!("{key}.fill"),
-                    "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"".into(),
-                );
-            }
-            if fill == "bipi" && b.shape == "particles" {
-                return e(
-                    &format!("{key}.fill"),
-                    "a \"particles\" block is already placed; it cannot be packed".into(),
-                );
-            }
-        }
-        if let Some(dx) = b.dx {
-            positive(&format!("{key}.dx"), dx)?;
-        }
-        if let Some(v) = &b.velocity {
-            vector(loaded, &format!("{key}.velocity"), v, d)?;
-        }
-        if let Some(tp) = &b.pressure_taper {
-            if tp.axis >= d {
-                return e(
-                    &format!("{key}.pressure_taper.axis"),
-                    format!("expected 0 to {}, found {}", d - 1, tp.axis),
-                );
-            }
-            positive(&format!("{key}.pressure_taper.length"), tp.length)?;
-        }
-        if let Some(InitialPressure::Named(name)) = &b.pressure {
-            if name != "hydrostatic" && name != "hydrostatic-eos" {
-                return e(
-                    &format!("{key}.pressure"),
-                    format!("expected \"hydrostatic\", \"hydrostatic-eos\" or a number, found \"{name}\""),
-                );
-            }
-            if let Some(axis) = gravity_along_periodic_axis(c) {
-                return e(
-                    &format!("{key}.pressure"),
-                    format!(
-                        "\"{name}\" with gravity along the periodic axis {axis}: the pressure \
-                         would jump where the period closes and start density waves; expected a \
-                         uniform pressure (a number, e.g. 0; the default there) or gravity \
-                         perpendicular to the periodic axes"
-                    ),
-                );
-            }
+    for k in 0..loaded.case.fluid_block.len() {
+        check_fluid_block(loaded, k)?;
+    }
+    Ok(())
+}
+
+/// Checks fluid block `k`.
+fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
+    let b = &c.fluid_block[k];
+    let key = format!("fluid_block[{k}]");
+    if b.shape == "walls" {
+        check_walls_block(loaded, k)?;
+    } else {
+        check_shape(loaded, &key, &b.shape_spec(), d, true)?;
+        if b.level.is_some() || b.clearance.is_some() {
+            return Err(loaded.error(
+                &key,
+                "`level` and `clearance` belong to a shape = \"walls\" block",
+            ));
         }
     }
+    for (m, hole) in b.hole.iter().enumerate() {
+        let hkey = format!("{key}.hole[{m}]");
+        if hole.shape == "particles" {
+            return Err(loaded.error(
+                &format!("{hkey}.shape"),
+                "a hole must be a shape, not \"particles\"",
+            ));
+        }
+        check_shape(loaded, &hkey, hole, d, false)?;
+    }
+    if let Some(fill) = &b.fill {
+        check_fill(loaded, &key, b, fill)?;
+    }
+    if let Some(dx) = b.dx {
+        positive(loaded, &format!("{key}.dx"), dx)?;
+    }
+    if let Some(v) = &b.velocity {
+        vector(loaded, &format!("{key}.velocity"), v, d)?;
+    }
+    if let Some(tp) = &b.pressure_taper {
+        if tp.axis >= d {
+            return Err(loaded.error(
+                &format!("{key}.pressure_taper.axis"),
+                format!("expected 0 to {}, found {}", d - 1, tp.axis),
+            ));
+        }
+        positive(loaded, &format!("{key}.pressure_taper.length"), tp.length)?;
+    }
+    if let Some(InitialPressure::Named(name)) = &b.pressure {
+        check_named_pressure(loaded, &key, name)?;
+    }
+    Ok(())
+}
+
+/// Checks the `fill` of the block at `key`: a known name, `"usaw"` for a 2-D lattice block
+/// with usaw walls, `"bipi"` for a block that is not already particles.
+fn check_fill(loaded: &LoadedCase, key: &str, b: &FluidBlock, fill: &str) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    if fill != "lattice" && fill != "bipi" && fill != "usaw" {
+        return Err(loaded.error(
+            &format!("{key}.fill"),
+            format!("expected \"lattice\", \"bipi\" or \"usaw\", found \"{fill}\""),
+        ));
+    }
+    if fill == "usaw" && (c.boundary != BoundaryName::Usaw || c.dim != 2 || b.shape == "particles")
+    {
+        return Err(loaded.error(
+            &format!("{key}.fill"),
+            "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"",
+        ));
+    }
+    if fill == "bipi" && b.shape == "particles" {
+        return Err(loaded.error(
+            &format!("{key}.fill"),
+            "a \"particles\" block is already placed; it cannot be packed",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a named initial pressure of the block at `key`: a known profile, and no gravity
+/// along a periodic axis.
+fn check_named_pressure(loaded: &LoadedCase, key: &str, name: &str) -> Result<(), CaseError> {
+    if name != "hydrostatic" && name != "hydrostatic-eos" {
+        return Err(loaded.error(
+            &format!("{key}.pressure"),
+            format!("expected \"hydrostatic\", \"hydrostatic-eos\" or a number, found \"{name}\""),
+        ));
+    }
+    if let Some(axis) = gravity_along_periodic_axis(&loaded.case) {
+        return Err(loaded.error(
+            &format!("{key}.pressure"),
+            format!(
+                "\"{name}\" with gravity along the periodic axis {axis}: the pressure \
+                 would jump where the period closes and start density waves; expected a \
+                 uniform pressure (a number, e.g. 0; the default there) or gravity \
+                 perpendicular to the periodic axes"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks `[[wall]]`: at least one (or a domain), each with its element size, shape, fluid
+/// side, open sides and owning body.
+fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
     if c.wall.is_empty() && c.domain.is_none() {
-        return e(
+        return Err(loaded.error(
             "wall",
-            "expected at least one [[wall]], or a [domain] for a case without walls".into(),
-        );
+            "expected at least one [[wall]], or a [domain] for a case without walls",
+        ));
     }
     for (k, w) in c.wall.iter().enumerate() {
         let key = format!("wall[{k}]");
         if let Some(size) = w.element_size {
-            positive(&format!("{key}.element_size"), size)?;
+            positive(loaded, &format!("{key}.element_size"), size)?;
         }
         if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
             crate::case::mesh_walls::check_wall(loaded, &key, w)?;
@@ -329,10 +436,10 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
             if let Some(f) = &w.fluid {
                 if w.shape != "box" || (f != "inside" && f != "outside") {
-                    return e(
+                    return Err(loaded.error(
                         &format!("{key}.fluid"),
                         format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape),
-                    );
+                    ));
                 }
             }
         }
@@ -343,56 +450,63 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
         };
         for o in &w.open {
             if !sides.contains(&o.as_str()) {
-                return e(
+                return Err(loaded.error(
                     &format!("{key}.open"),
                     format!("expected sides among {sides:?}, found \"{o}\""),
-                );
+                ));
             }
         }
         if let Some(body) = &w.body {
             if !c.body.iter().any(|b| &b.name == body) {
-                return e(
+                return Err(loaded.error(
                     &format!("{key}.body"),
                     format!("no [[body]] is named \"{body}\""),
-                );
+                ));
             }
         }
     }
+    Ok(())
+}
+
+/// Checks `[[body]]`: unique names, the centre, and one of a free, piston or prescribed
+/// motion with its vectors.
+fn check_bodies(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
     for (k, b) in c.body.iter().enumerate() {
         let key = format!("body[{k}]");
         if b.name.is_empty() || c.body.iter().filter(|o| o.name == b.name).count() > 1 {
-            return e(
+            return Err(loaded.error(
                 &format!("{key}.name"),
                 format!("expected a unique, non-empty name, found \"{}\"", b.name),
-            );
+            ));
         }
         if let Some(centre) = &b.centre {
             vector(loaded, &format!("{key}.centre"), centre, d)?;
         }
         if let Some(fs) = &b.free {
             if b.motion.is_some() || b.piston.is_some() {
-                return e(
+                return Err(loaded.error(
                     &format!("{key}.free"),
-                    "a body has one of motion, piston or free, not several".into(),
-                );
+                    "a body has one of motion, piston or free, not several",
+                ));
             }
             check_free(loaded, &key, fs, d)?;
         }
         if let Some(p) = &b.piston {
             if b.motion.is_some() {
-                return e(
+                return Err(loaded.error(
                     &format!("{key}.piston"),
-                    "a body has either a motion or a piston, not both".into(),
-                );
+                    "a body has either a motion or a piston, not both",
+                ));
             }
             vector(loaded, &format!("{key}.piston.axis"), &p.axis, d)?;
             if p.axis.iter().all(|x| *x == 0.0) {
-                return e(
-                    &format!("{key}.piston.axis"),
-                    "expected a non-zero vector".into(),
+                return Err(
+                    loaded.error(&format!("{key}.piston.axis"), "expected a non-zero vector")
                 );
             }
-            positive(&format!("{key}.piston.mass"), p.mass)?;
+            positive(loaded, &format!("{key}.piston.mass"), p.mass)?;
         }
         if let Some(m) = &b.motion {
             for (name, v) in [
@@ -411,50 +525,62 @@ pub fn check_case(loaded: &LoadedCase) -> Result<(), CaseError> {
             }
         }
     }
-    if let Some(dom) = &c.domain {
-        vector(loaded, "domain.min", &dom.min, d)?;
-        vector(loaded, "domain.max", &dom.max, d)?;
-        if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
-            return e("domain", "expected min < max in every direction".into());
+    Ok(())
+}
+
+/// Checks `[domain]`: its corners, and periodic axes named once, each at least three kernel
+/// supports long.
+fn check_domain(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let c = &loaded.case;
+    let d = c.dim as usize;
+    let Some(dom) = &c.domain else {
+        return Ok(());
+    };
+    vector(loaded, "domain.min", &dom.min, d)?;
+    vector(loaded, "domain.max", &dom.max, d)?;
+    if dom.min.iter().zip(&dom.max).any(|(a, b)| a >= b) {
+        return Err(loaded.error("domain", "expected min < max in every direction"));
+    }
+    let names = &["x", "y", "z"][..d];
+    for (k, a) in dom.periodic.iter().enumerate() {
+        let Some(axis) = names.iter().position(|n| n == a) else {
+            return Err(loaded.error(
+                "domain.periodic",
+                format!("expected axes among {names:?}, found \"{a}\""),
+            ));
+        };
+        if dom.periodic[..k].contains(a) {
+            return Err(loaded.error("domain.periodic", format!("axis \"{a}\" is listed twice")));
         }
-        let names = &["x", "y", "z"][..d];
-        for (k, a) in dom.periodic.iter().enumerate() {
-            let Some(axis) = names.iter().position(|n| n == a) else {
-                return e(
-                    "domain.periodic",
-                    format!("expected axes among {names:?}, found \"{a}\""),
-                );
-            };
-            if dom.periodic[..k].contains(a) {
-                return e("domain.periodic", format!("axis \"{a}\" is listed twice"));
-            }
-            let support = 2.0 * c.resolution.h_over_dx * c.resolution.dx;
-            let period = dom.max[axis] - dom.min[axis];
-            if period < 3.0 * support {
-                return e(
-                    "domain.periodic",
-                    format!(
-                        "the period along {a} (domain extent {period}) must be at least three kernel supports ({})",
-                        3.0 * support
-                    ),
-                );
-            }
+        let support = 2.0 * c.resolution.h_over_dx * c.resolution.dx;
+        let period = dom.max[axis] - dom.min[axis];
+        if period < 3.0 * support {
+            return Err(loaded.error(
+                "domain.periodic",
+                format!(
+                    "the period along {a} (domain extent {period}) must be at least three kernel supports ({})",
+                    3.0 * support
+                ),
+            ));
         }
     }
-    check_pack(loaded)?;
-    check_reliability(loaded)?;
-    check_settle(loaded)?;
-    for (k, p) in c.probe.iter().enumerate() {
+    Ok(())
+}
+
+/// Checks `[[probe]]`: a position of the case's dimension and a known kind.
+fn check_probes(loaded: &LoadedCase) -> Result<(), CaseError> {
+    let d = loaded.case.dim as usize;
+    for (k, p) in loaded.case.probe.iter().enumerate() {
         let key = format!("probe[{k}]");
         vector(loaded, &format!("{key}.position"), &p.position, d)?;
         if p.kind != "pressure" && p.kind != "wall_pressure" && p.kind != "height" {
-            return e(
+            return Err(loaded.error(
                 &format!("{key}.kind"),
                 format!(
                     "expected \"pressure\", \"wall_pressure\" or \"height\", found \"{}\"",
                     p.kind
                 ),
-            );
+            ));
         }
     }
     Ok(())

@@ -16,13 +16,13 @@
 //!   first layer's distance to the wall); `pack-<k>.png` plots.
 
 use crate::case::dim::CaseDim;
-use crate::case::fill::pack_block;
+use crate::case::fill::{pack_block, PackedBlock};
 use crate::case::schema::LoadedCase;
 use crate::formats::files::{at, write_atomic};
 use crate::formats::plot::{write_png, Plot, Series as PlotSeries, Style};
 use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray};
 use crate::run::error::RunError;
-use bisph_core::packing::{IterationStats, Stage};
+use bisph_core::packing::{IterationStats, Packer, Stage};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -170,6 +170,30 @@ fn stage_code(s: Stage) -> f64 {
     }
 }
 
+/// The header of `pack.csv`.
+const PACK_CSV_HEADER: &str =
+    "iteration,kinetic,tpd,gradc_mean,gradc_max,gradc_mean_all,gradc_max_all,moved,stage,block,\
+     first_layer,gradc_mean_deep\n";
+
+/// What the blocks of a case add up to across the pack: `pack.csv` rows, the points and
+/// point data of `particles.vtu` and `lattice.vtu`, the cells of `walls.vtu`.
+#[derive(Default)]
+struct PackOutputs {
+    csv: String,
+    all_points: Vec<[f64; 3]>,
+    lattice_points: Vec<[f64; 3]>,
+    block_id: Vec<f64>,
+    gradc: Vec<f64>,
+    dist: Vec<f64>,
+    disp: Vec<f64>,
+    frozen: Vec<f64>,
+    wall_vertices: Vec<[f64; 3]>,
+    wall_cells: Vec<Vec<u32>>,
+    wall_normals: Vec<f64>,
+    wall_block: Vec<f64>,
+}
+
+/// Packs every block of a case in `V`'s dimension and writes the outputs into `out`.
 fn pack_dim<V: CaseDim>(
     loaded: &LoadedCase,
     out: &Path,
@@ -179,17 +203,11 @@ fn pack_dim<V: CaseDim>(
     at(out, std::fs::create_dir_all(out))?;
     write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
     let case = &loaded.case;
-    let mut csv = String::from(
-        "iteration,kinetic,tpd,gradc_mean,gradc_max,gradc_mean_all,gradc_max_all,moved,stage,block,\
-         first_layer,gradc_mean_deep\n",
-    );
+    let mut outputs = PackOutputs {
+        csv: String::from(PACK_CSV_HEADER),
+        ..PackOutputs::default()
+    };
     let mut summaries = Vec::new();
-    let mut all_points: Vec<[f64; 3]> = Vec::new();
-    let mut lattice_points: Vec<[f64; 3]> = Vec::new();
-    let (mut block_id, mut gradc, mut dist, mut disp, mut frozen) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut wall_vertices, mut wall_cells, mut wall_normals, mut wall_block) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut packed_doc: toml::Table = loaded
         .text
         .parse()
@@ -197,242 +215,32 @@ fn pack_dim<V: CaseDim>(
     let mut kept_blocks = Vec::new();
     for (k, block) in case.fluid_block.iter().enumerate() {
         if block.shape == "particles" {
-            if let Some(b) = packed_doc
-                .get("fluid_block")
-                .and_then(|v| v.as_array())
-                .and_then(|a| a.get(k))
-            {
+            if let Some(b) = case_block(&packed_doc, k) {
                 kept_blocks.push(b.clone());
             }
             continue;
         }
         let mut packed =
             pack_block::<V>(loaded, k, &mut |s| progress(k, s)).map_err(RunError::Case)?;
-        let p = &packed.packer;
-        for s in &packed.history {
-            let _ = writeln!(
-                csv,
-                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e}",
-                s.iteration,
-                s.kinetic,
-                s.tpd,
-                s.gradc_mean,
-                s.gradc_max,
-                s.gradc_mean_all,
-                s.gradc_max_all,
-                s.moved,
-                stage_code(s.stage),
-                k,
-                s.first_layer,
-                s.gradc_mean_deep
-            );
-        }
-        let distances = p.wall_distances();
-        let start_distances: Vec<f64> = p.start.iter().map(|&x| p.walls.distance(x)).collect();
-        let dx = p.params.dx;
-        let outside = p
-            .positions
-            .iter()
-            .filter(|&&x| !packed.region.contains(x))
-            .count();
-        let (first, last) = (packed.history[0], *packed.history.last().unwrap());
-        let iterations_a = packed
-            .history
-            .iter()
-            .filter(|s| s.stage == Stage::A)
-            .count();
-        let iterations_c = packed
-            .history
-            .iter()
-            .filter(|s| s.stage == Stage::C)
-            .count()
-            .saturating_sub(1);
-        let iterations = (iterations_a + iterations_c).max(1);
-        summaries.push(BlockSummary {
-            block: k,
-            solid: block.solid,
-            particles: p.positions.len(),
-            dx,
-            h: p.params.h,
-            boundary_elements: p.walls.elements.len(),
-            push_radius: p.push_radius,
-            region_measure: packed.region.measure,
-            particle_measure: p.positions.len() as f64 * p.volume(),
-            stage_a_iterations: iterations_a,
-            stage_c_iterations: iterations_c,
-            seconds: packed.seconds,
-            seconds_per_iteration: packed.seconds / iterations as f64,
-            gradc_mean: [first.gradc_mean, last.gradc_mean],
-            gradc_max: [first.gradc_max, last.gradc_max],
-            gradc_mean_all: [first.gradc_mean_all, last.gradc_mean_all],
-            gradc_max_all: [first.gradc_max_all, last.gradc_max_all],
-            gradc_mean_deep: [first.gradc_mean_deep, last.gradc_mean_deep],
-            first_layer_drift: first_layer_drift(&packed.history),
-            first_layer_lattice: LayerStats::of(&start_distances, dx),
-            first_layer: LayerStats::of(&distances, dx),
-            outside,
-        });
-        // Particle outputs.
-        let mags = packed.packer.gradc_magnitudes();
-        let p = &packed.packer;
-        let mut file = String::new();
-        let names = ["x", "y", "z"];
-        let _ = writeln!(
-            file,
-            "{},grad_c,wall_distance,frozen",
-            names[..V::DIM].join(",")
-        );
-        for (i, &x) in p.positions.iter().enumerate() {
-            let xyz = x.to_xyz();
-            let row: Vec<String> = xyz[..V::DIM].iter().map(|c| format!("{c:.17e}")).collect();
-            let _ = writeln!(
-                file,
-                "{},{:e},{:e},{}",
-                row.join(","),
-                mags[i].0,
-                distances[i],
-                u8::from(p.frozen[i])
-            );
-            all_points.push(xyz);
-            lattice_points.push(p.start[i].to_xyz());
-            block_id.push(k as f64);
-            gradc.push(mags[i].0);
-            dist.push(distances[i]);
-            disp.extend((x - p.start[i]).to_xyz());
-            frozen.push(if p.frozen[i] { 1.0 } else { 0.0 });
-        }
+        append_history_rows(&mut outputs.csv, k, &packed.history);
+        let distances = packed.packer.wall_distances();
+        summaries.push(block_summary(k, block.solid, &packed, &distances));
         let name = format!("particles-{k}.csv");
+        let file = particle_rows(&mut packed, k, &distances, &mut outputs);
         write_atomic(&out.join(&name), file.as_bytes())?;
-        let e = &p.walls.elements;
-        for j in 0..e.len() {
-            let base = wall_vertices.len() as u32;
-            let corners = e.current_corners(j);
-            wall_vertices.extend(corners.iter().map(|c| c.to_xyz()));
-            wall_cells.push(
-                (0..corners.len() as u32)
-                    .map(|m| base + m)
-                    .collect::<Vec<u32>>(),
-            );
-            wall_normals.extend(e.normal[j].to_xyz());
-            wall_block.push(k as f64);
-        }
+        append_walls(&packed.packer, k, &mut outputs);
         if !block.solid {
-            if let Some(b) = packed_doc
-                .get("fluid_block")
-                .and_then(|v| v.as_array())
-                .and_then(|a| a.get(k))
-                .and_then(|v| v.as_table())
-            {
-                let mut b = b.clone();
-                for key in [
-                    "min",
-                    "max",
-                    "points",
-                    "centre",
-                    "radius",
-                    "subdivisions",
-                    "units",
-                    "scale",
-                    "rotate",
-                    "translate",
-                    "hole",
-                    "fill",
-                ] {
-                    b.remove(key);
-                }
-                b.insert("shape".into(), toml::Value::String("particles".into()));
-                b.insert("file".into(), toml::Value::String(name.clone()));
-                b.insert("dx".into(), toml::Value::Float(dx));
-                kept_blocks.push(toml::Value::Table(b));
+            if let Some(b) = packed_block_entry(&packed_doc, k, &name, packed.packer.params.dx) {
+                kept_blocks.push(b);
             }
         }
         plot_block(out, k, &packed.history)?;
         packed.history.clear();
     }
-    let vtk_err =
-        |path: &Path, e: std::io::Error| RunError::Output(at::<()>(path, Err(e)).unwrap_err());
-    let path = out.join("particles.vtu");
-    write_points_vtu(
-        &path,
-        &all_points,
-        &[
-            DataArray {
-                name: "block",
-                components: 1,
-                values: &block_id,
-                integer: false,
-            },
-            DataArray {
-                name: "grad_c",
-                components: 1,
-                values: &gradc,
-                integer: false,
-            },
-            DataArray {
-                name: "wall_distance",
-                components: 1,
-                values: &dist,
-                integer: false,
-            },
-            DataArray {
-                name: "displacement",
-                components: 3,
-                values: &disp,
-                integer: false,
-            },
-            DataArray {
-                name: "frozen",
-                components: 1,
-                values: &frozen,
-                integer: false,
-            },
-        ],
-    )
-    .map_err(|e| vtk_err(&path, e))?;
-    let path = out.join("lattice.vtu");
-    write_points_vtu(
-        &path,
-        &lattice_points,
-        &[DataArray {
-            name: "block",
-            components: 1,
-            values: &block_id,
-            integer: false,
-        }],
-    )
-    .map_err(|e| vtk_err(&path, e))?;
-    let path = out.join("walls.vtu");
-    write_cells_vtu(
-        &path,
-        &wall_vertices,
-        &wall_cells,
-        &[
-            DataArray {
-                name: "normal",
-                components: 3,
-                values: &wall_normals,
-                integer: false,
-            },
-            DataArray {
-                name: "block",
-                components: 1,
-                values: &wall_block,
-                integer: false,
-            },
-        ],
-    )
-    .map_err(|e| vtk_err(&path, e))?;
-    write_atomic(&out.join("pack.csv"), csv.as_bytes())?;
+    write_vtk_files(out, &outputs)?;
+    write_atomic(&out.join("pack.csv"), outputs.csv.as_bytes())?;
     packed_doc.insert("fluid_block".into(), toml::Value::Array(kept_blocks));
-    let packed_text = toml::to_string(&packed_doc).unwrap_or_default();
-    write_atomic(
-        &out.join("packed.toml"),
-        format!(
-            "# {} packed by `bisph pack`: every fluid block starts from its packed particles.\n{packed_text}",
-            case.name
-        )
-        .as_bytes(),
-    )?;
+    write_packed_toml(out, &case.name, &packed_doc)?;
     let summary = PackSummary {
         case: case.name.clone(),
         dim: V::DIM,
@@ -442,6 +250,239 @@ fn pack_dim<V: CaseDim>(
     let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
     write_atomic(&out.join("summary.json"), json.as_bytes())?;
     Ok(summary)
+}
+
+/// Entry `k` of the case's `[[fluid_block]]` array in its TOML document.
+fn case_block(doc: &toml::Table, k: usize) -> Option<&toml::Value> {
+    doc.get("fluid_block")
+        .and_then(|v| v.as_array())
+        .and_then(|a| a.get(k))
+}
+
+/// Appends the `pack.csv` rows of block `k`'s iterations.
+fn append_history_rows(csv: &mut String, k: usize, history: &[IterationStats]) {
+    for s in history {
+        let _ = writeln!(
+            csv,
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e}",
+            s.iteration,
+            s.kinetic,
+            s.tpd,
+            s.gradc_mean,
+            s.gradc_max,
+            s.gradc_mean_all,
+            s.gradc_max_all,
+            s.moved,
+            stage_code(s.stage),
+            k,
+            s.first_layer,
+            s.gradc_mean_deep
+        );
+    }
+}
+
+/// The `summary.json` entry of packed block `k`, given its particles' wall distances.
+fn block_summary<V: CaseDim>(
+    k: usize,
+    solid: bool,
+    packed: &PackedBlock<V>,
+    distances: &[f64],
+) -> BlockSummary {
+    let p = &packed.packer;
+    let start_distances: Vec<f64> = p.start.iter().map(|&x| p.walls.distance(x)).collect();
+    let dx = p.params.dx;
+    let outside = p
+        .positions
+        .iter()
+        .filter(|&&x| !packed.region.contains(x))
+        .count();
+    let (first, last) = (packed.history[0], *packed.history.last().unwrap());
+    let iterations_a = packed
+        .history
+        .iter()
+        .filter(|s| s.stage == Stage::A)
+        .count();
+    let iterations_c = packed
+        .history
+        .iter()
+        .filter(|s| s.stage == Stage::C)
+        .count()
+        .saturating_sub(1);
+    let iterations = (iterations_a + iterations_c).max(1);
+    BlockSummary {
+        block: k,
+        solid,
+        particles: p.positions.len(),
+        dx,
+        h: p.params.h,
+        boundary_elements: p.walls.elements.len(),
+        push_radius: p.push_radius,
+        region_measure: packed.region.measure,
+        particle_measure: p.positions.len() as f64 * p.volume(),
+        stage_a_iterations: iterations_a,
+        stage_c_iterations: iterations_c,
+        seconds: packed.seconds,
+        seconds_per_iteration: packed.seconds / iterations as f64,
+        gradc_mean: [first.gradc_mean, last.gradc_mean],
+        gradc_max: [first.gradc_max, last.gradc_max],
+        gradc_mean_all: [first.gradc_mean_all, last.gradc_mean_all],
+        gradc_max_all: [first.gradc_max_all, last.gradc_max_all],
+        gradc_mean_deep: [first.gradc_mean_deep, last.gradc_mean_deep],
+        first_layer_drift: first_layer_drift(&packed.history),
+        first_layer_lattice: LayerStats::of(&start_distances, dx),
+        first_layer: LayerStats::of(distances, dx),
+        outside,
+    }
+}
+
+/// The text of `particles-<k>.csv` for packed block `k`; adds its particles to the VTK point
+/// data.
+fn particle_rows<V: CaseDim>(
+    packed: &mut PackedBlock<V>,
+    k: usize,
+    distances: &[f64],
+    outputs: &mut PackOutputs,
+) -> String {
+    let mags = packed.packer.gradc_magnitudes();
+    let p = &packed.packer;
+    let mut file = String::new();
+    let names = ["x", "y", "z"];
+    let _ = writeln!(
+        file,
+        "{},grad_c,wall_distance,frozen",
+        names[..V::DIM].join(",")
+    );
+    for (i, &x) in p.positions.iter().enumerate() {
+        let xyz = x.to_xyz();
+        let row: Vec<String> = xyz[..V::DIM].iter().map(|c| format!("{c:.17e}")).collect();
+        let _ = writeln!(
+            file,
+            "{},{:e},{:e},{}",
+            row.join(","),
+            mags[i].0,
+            distances[i],
+            u8::from(p.frozen[i])
+        );
+        outputs.all_points.push(xyz);
+        outputs.lattice_points.push(p.start[i].to_xyz());
+        outputs.block_id.push(k as f64);
+        outputs.gradc.push(mags[i].0);
+        outputs.dist.push(distances[i]);
+        outputs.disp.extend((x - p.start[i]).to_xyz());
+        outputs.frozen.push(if p.frozen[i] { 1.0 } else { 0.0 });
+    }
+    file
+}
+
+/// Adds the boundary elements block `k` was packed against to the cells of `walls.vtu`.
+fn append_walls<V: CaseDim>(p: &Packer<V>, k: usize, outputs: &mut PackOutputs) {
+    let e = &p.walls.elements;
+    for j in 0..e.len() {
+        let base = outputs.wall_vertices.len() as u32;
+        let corners = e.current_corners(j);
+        outputs
+            .wall_vertices
+            .extend(corners.iter().map(|c| c.to_xyz()));
+        outputs.wall_cells.push(
+            (0..corners.len() as u32)
+                .map(|m| base + m)
+                .collect::<Vec<u32>>(),
+        );
+        outputs.wall_normals.extend(e.normal[j].to_xyz());
+        outputs.wall_block.push(k as f64);
+    }
+}
+
+/// Block `k` of the case as `packed.toml` holds it: its geometry replaced by its packed
+/// particle file `name` at spacing `dx`.
+fn packed_block_entry(doc: &toml::Table, k: usize, name: &str, dx: f64) -> Option<toml::Value> {
+    let mut b = case_block(doc, k)?.as_table()?.clone();
+    for key in [
+        "min",
+        "max",
+        "points",
+        "centre",
+        "radius",
+        "subdivisions",
+        "units",
+        "scale",
+        "rotate",
+        "translate",
+        "hole",
+        "fill",
+    ] {
+        b.remove(key);
+    }
+    b.insert("shape".into(), toml::Value::String("particles".into()));
+    b.insert("file".into(), toml::Value::String(name.to_string()));
+    b.insert("dx".into(), toml::Value::Float(dx));
+    Some(toml::Value::Table(b))
+}
+
+/// Writes `particles.vtu`, `lattice.vtu` and `walls.vtu`.
+fn write_vtk_files(out: &Path, o: &PackOutputs) -> Result<(), RunError> {
+    let vtk_err =
+        |path: &Path, e: std::io::Error| RunError::Output(at::<()>(path, Err(e)).unwrap_err());
+    let scalar = |name, values| DataArray {
+        name,
+        components: 1,
+        values,
+        integer: false,
+    };
+    let path = out.join("particles.vtu");
+    write_points_vtu(
+        &path,
+        &o.all_points,
+        &[
+            scalar("block", &o.block_id),
+            scalar("grad_c", &o.gradc),
+            scalar("wall_distance", &o.dist),
+            DataArray {
+                name: "displacement",
+                components: 3,
+                values: &o.disp,
+                integer: false,
+            },
+            scalar("frozen", &o.frozen),
+        ],
+    )
+    .map_err(|e| vtk_err(&path, e))?;
+    let path = out.join("lattice.vtu");
+    write_points_vtu(&path, &o.lattice_points, &[scalar("block", &o.block_id)])
+        .map_err(|e| vtk_err(&path, e))?;
+    let path = out.join("walls.vtu");
+    write_cells_vtu(
+        &path,
+        &o.wall_vertices,
+        &o.wall_cells,
+        &[
+            DataArray {
+                name: "normal",
+                components: 3,
+                values: &o.wall_normals,
+                integer: false,
+            },
+            scalar("block", &o.wall_block),
+        ],
+    )
+    .map_err(|e| vtk_err(&path, e))
+}
+
+/// Writes `packed.toml`: the case document with its packed blocks, under a header line.
+fn write_packed_toml(
+    out: &Path,
+    case_name: &str,
+    packed_doc: &toml::Table,
+) -> Result<(), RunError> {
+    let packed_text = toml::to_string(packed_doc).unwrap_or_default();
+    write_atomic(
+        &out.join("packed.toml"),
+        format!(
+            "# {case_name} packed by `bisph pack`: every fluid block starts from its packed particles.\n{packed_text}"
+        )
+        .as_bytes(),
+    )?;
+    Ok(())
 }
 
 /// `pack-<k>.png`: kinetic energy, TPD and |grad C| against the iteration.
