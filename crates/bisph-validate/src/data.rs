@@ -71,12 +71,4 @@ mod tests {
         assert!(err.contains(DATA_ENV), "{err}");
         std::fs::remove_dir_all(&root).unwrap();
     }
-
-    #[test]
-    fn the_source_tree_holds_the_shipped_data() {
-        let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
-        for file in [crate::spheric2::DATA_FILE, crate::paper1::LOBOVSKY_S2_FILE] {
-            find_in(std::slice::from_ref(&source), file).unwrap();
-        }
-    }
 }

@@ -656,6 +656,12 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_source_tree_holds_the_lobovsky_percentiles() {
+        let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
+        crate::data::find_in(&[source], LOBOVSKY_S2_FILE).unwrap();
+    }
+
+    #[test]
     fn ode_period_tends_to_the_harmonic_one_for_small_amplitudes() {
         let w2: f64 = 0.25;
         let (period, _, _) = piston_ode_period(w2, 1.0, 1e-4, 0.0);

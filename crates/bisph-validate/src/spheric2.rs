@@ -264,3 +264,12 @@ impl ValidationCase for SphericTest2 {
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
     vec![Box::new(SphericTest2)]
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_source_tree_holds_the_experiment_data() {
+        let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
+        crate::data::find_in(&[source], super::DATA_FILE).unwrap();
+    }
+}

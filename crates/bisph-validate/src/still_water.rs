@@ -48,7 +48,7 @@ const ENERGY_LIMITATION: &str = "the energy-conserving walls are zeroth-order co
 const USAW_LIMITATION: &str = "the start that fits the semi-analytical walls (fill = \"usaw\") crowds the particles in the acute corner where the sloped side meets the free surface against the sloped wall (its shifts never cross a wall), and the run blows up within the first steps";
 const COARSE_3D_LIMITATION: &str = "in 3-D the bi boundary term integrates the kernel at element centres by default (boundary_quadrature = \"centre\"), and over elements dx x dx that quadrature leaves a slow flow along the side walls and edges; boundary_quadrature = \"exact\" holds the tank, at several times the cost";
 
-const SPHERIC_LIMITATION: &str = "not met yet around the SPHERIC obstacle: at dx = 0.55/5 with 5 s of settling the particles rearrange by up to 0.4 m and settling ends at 8% of sqrt(g H); the cause (resolution, five particles deep, the 3-D centre quadrature of the bi boundary term, the lattice gaps the walls fill leaves at the obstacle) is not yet separated";
+const SPHERIC_LIMITATION: &str = "not met yet around the SPHERIC obstacle: at dx = 0.55/5 with 5 s of settling the particles rearrange by up to 0.4 m, settling ends at 8% of sqrt(g H), the run peaks at 13% and one particle ends behind a wall; the cause (resolution, five particles deep, the 3-D centre quadrature of the bi boundary term, the lattice gaps the walls fill leaves at the obstacle) is not yet separated";
 
 /// One tank and the models it is run with, with the bars each model is known not to meet yet
 /// (by check key: `end`, `speed`, `growth`, `bottom`, `behind`) and why.
@@ -122,7 +122,11 @@ const TANKS: [Tank; 4] = [
         full: (0.55 / 10.0, 10.0),
         quick_settling: Some(5.0),
         bottom: [2.0, 0.5, 0.0],
-        models: &[(BI, &["speed", "growth", "bottom"], SPHERIC_LIMITATION)],
+        models: &[(
+            BI,
+            &["speed", "growth", "bottom", "behind"],
+            SPHERIC_LIMITATION,
+        )],
     },
 ];
 

@@ -1,17 +1,16 @@
 //! From a checked case to a ready [`Simulation`].
 
 use crate::case::bodies::free_bodies;
-use crate::case::dim::CaseDim;
+use crate::case::dim::{oriented_wall_shapes, CaseDim};
 use crate::case::fill::{block_points, relax_for_usaw};
 
 use crate::case::error::CaseError;
 use crate::case::schema::{
-    BoundaryName, BoundaryQuadratureName, Case, ContinuityName, DiffusionName, EosName, FluidBlock,
-    FluxRuleName, InitialPressure, IntegratorName, LoadedCase, MassRule, ShepardName,
-    ToleranceReference, UsawGammaName, WallInterpolationName,
+    BlockShape, BoundaryName, BoundaryQuadratureName, Case, ContinuityName, DiffusionName, EosName,
+    FluidBlock, FluxRuleName, InitialPressure, IntegratorName, LoadedCase, MassRule, ProbeKindName,
+    ShepardName, ToleranceReference, UsawGammaName, WallInterpolationName, WallShape,
 };
 use bisph_core::energy::{energy_scale, fluid_energies};
-use bisph_core::geometry::ElementShape;
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
@@ -201,7 +200,7 @@ fn build_walls<V: CaseDim>(
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
         };
         let shapes = oriented_wall_shapes::<V>(loaded, k, element_size)?;
-        if V::DIM == 3 && body > 0 && (w.shape == "mesh" || w.shape == "capsule") {
+        if V::DIM == 3 && body > 0 && matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
             let mut surface = crate::case::mesh_walls::wall_surface(
                 loaded,
                 &format!("wall[{k}]"),
@@ -318,7 +317,7 @@ fn push_block<V: CaseDim>(
     let dx = case.resolution.dx;
     let g = gravity.length();
     let key = format!("fluid_block[{k}]");
-    if block.shape == "polyline" {
+    if block.shape == BlockShape::Polyline {
         return Err(loaded.error(
             &format!("{key}.shape"),
             "a fluid block must be a closed \"box\" or \"polygon\"",
@@ -342,7 +341,7 @@ fn push_block<V: CaseDim>(
     let velocity = V::from_slice(block.velocity.as_deref().unwrap_or(&[]));
     let height = |r: V| if g > 0.0 { -gravity.dot(r) / g } else { 0.0 };
     let surface = block.surface.unwrap_or_else(|| {
-        if matches!(block.shape.as_str(), "box" | "polygon")
+        if matches!(block.shape, BlockShape::Box | BlockShape::Polygon)
             && crate::case::regions::transform_of(&block.shape_spec()).is_identity()
         {
             block_top(block, gravity, g)
@@ -468,10 +467,10 @@ fn build_probes<V: CaseDim>(case: &Case) -> Vec<Probe<V>> {
         .iter()
         .map(|p| Probe {
             name: p.name.clone(),
-            kind: match p.kind.as_str() {
-                "wall_pressure" => ProbeKind::WallPressure,
-                "height" => ProbeKind::Height,
-                _ => ProbeKind::Pressure,
+            kind: match p.kind {
+                ProbeKindName::Pressure => ProbeKind::Pressure,
+                ProbeKindName::WallPressure => ProbeKind::WallPressure,
+                ProbeKindName::Height => ProbeKind::Height,
             },
             position: V::from_slice(&p.position),
         })
@@ -566,24 +565,6 @@ fn integrator_of<V: CaseDim>(case: &Case, fluid: &Fluid<V>, eos: &Eos, gravity: 
             })
         }
     }
-}
-
-/// The elements of wall `k`, about `element_size` across, normals out of the fluid.
-pub fn oriented_wall_shapes<V: CaseDim>(
-    loaded: &LoadedCase,
-    k: usize,
-    element_size: f64,
-) -> Result<Vec<ElementShape<V>>, CaseError> {
-    let w = &loaded.case.wall[k];
-    let mut shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
-    if w.shape == "box" && w.fluid.as_deref() == Some("outside") {
-        // A box obstacle or body: normals into the box, out of the fluid around it.
-        for s in &mut shapes {
-            s.normal = -s.normal;
-            s.corners.reverse();
-        }
-    }
-    Ok(shapes)
 }
 
 fn eos_background(eos: &Eos) -> f64 {

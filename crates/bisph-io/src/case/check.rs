@@ -320,7 +320,7 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
     let d = c.dim as usize;
     let b = &c.fluid_block[k];
     let key = format!("fluid_block[{k}]");
-    if b.shape == "walls" {
+    if b.shape == BlockShape::Walls {
         check_walls_block(loaded, k)?;
     } else {
         check_shape(loaded, &key, &b.shape_spec(), d, true)?;
@@ -333,7 +333,7 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
     }
     for (m, hole) in b.hole.iter().enumerate() {
         let hkey = format!("{key}.hole[{m}]");
-        if hole.shape == "particles" {
+        if hole.shape == BlockShape::Particles {
             return Err(loaded.error(
                 &format!("{hkey}.shape"),
                 "a hole must be a shape, not \"particles\"",
@@ -341,7 +341,7 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
         }
         check_shape(loaded, &hkey, hole, d, false)?;
     }
-    if let Some(fill) = &b.fill {
+    if let Some(fill) = b.fill {
         check_fill(loaded, &key, b, fill)?;
     }
     if let Some(dx) = b.dx {
@@ -365,24 +365,24 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
     Ok(())
 }
 
-/// Checks the `fill` of the block at `key`: a known name, `"usaw"` for a 2-D lattice block
-/// with usaw walls, `"bipi"` for a block that is not already particles.
-fn check_fill(loaded: &LoadedCase, key: &str, b: &FluidBlock, fill: &str) -> Result<(), CaseError> {
+/// Checks the `fill` of the block at `key`: `"usaw"` for a 2-D lattice block with usaw walls,
+/// `"bipi"` for a block that is not already particles.
+fn check_fill(
+    loaded: &LoadedCase,
+    key: &str,
+    b: &FluidBlock,
+    fill: FillName,
+) -> Result<(), CaseError> {
     let c = &loaded.case;
-    if fill != "lattice" && fill != "bipi" && fill != "usaw" {
-        return Err(loaded.error(
-            &format!("{key}.fill"),
-            format!("expected \"lattice\", \"bipi\" or \"usaw\", found \"{fill}\""),
-        ));
-    }
-    if fill == "usaw" && (c.boundary != BoundaryName::Usaw || c.dim != 2 || b.shape == "particles")
+    if fill == FillName::Usaw
+        && (c.boundary != BoundaryName::Usaw || c.dim != 2 || b.shape == BlockShape::Particles)
     {
         return Err(loaded.error(
             &format!("{key}.fill"),
             "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"",
         ));
     }
-    if fill == "bipi" && b.shape == "particles" {
+    if fill == FillName::Bipi && b.shape == BlockShape::Particles {
         return Err(loaded.error(
             &format!("{key}.fill"),
             "a \"particles\" block is already placed; it cannot be packed",
@@ -430,15 +430,22 @@ fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
         if let Some(size) = w.element_size {
             positive(loaded, &format!("{key}.element_size"), size)?;
         }
-        if d == 3 && (w.shape == "mesh" || w.shape == "capsule") {
+        if d == 3 && matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
             crate::case::mesh_walls::check_wall(loaded, &key, w)?;
         } else {
-            shape_points(loaded, &key, &w.shape, &w.min, &w.max, &w.points, d)?;
+            let outline = match w.shape {
+                WallShape::Box => Some(Outline::Box),
+                WallShape::Polygon => Some(Outline::Polygon),
+                WallShape::Polyline => Some(Outline::Polyline),
+                WallShape::Mesh | WallShape::Capsule => None,
+            };
+            let points = (&w.min, &w.max, &w.points);
+            shape_points(loaded, &key, w.shape.name(), outline, points, d)?;
             if let Some(f) = &w.fluid {
-                if w.shape != "box" || (f != "inside" && f != "outside") {
+                if w.shape != WallShape::Box || (f != "inside" && f != "outside") {
                     return Err(loaded.error(
                         &format!("{key}.fluid"),
-                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape),
+                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape.name()),
                     ));
                 }
             }
@@ -567,21 +574,11 @@ fn check_domain(loaded: &LoadedCase) -> Result<(), CaseError> {
     Ok(())
 }
 
-/// Checks `[[probe]]`: a position of the case's dimension and a known kind.
+/// Checks `[[probe]]`: a position of the case's dimension.
 fn check_probes(loaded: &LoadedCase) -> Result<(), CaseError> {
     let d = loaded.case.dim as usize;
     for (k, p) in loaded.case.probe.iter().enumerate() {
-        let key = format!("probe[{k}]");
-        vector(loaded, &format!("{key}.position"), &p.position, d)?;
-        if p.kind != "pressure" && p.kind != "wall_pressure" && p.kind != "height" {
-            return Err(loaded.error(
-                &format!("{key}.kind"),
-                format!(
-                    "expected \"pressure\", \"wall_pressure\" or \"height\", found \"{}\"",
-                    p.kind
-                ),
-            ));
-        }
+        vector(loaded, &format!("probe[{k}].position"), &p.position, d)?;
     }
     Ok(())
 }
@@ -666,7 +663,7 @@ fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
                 }
             };
             for w in &c.wall {
-                if w.shape != "box" && w.shape != "polygon" && w.shape != "polyline" {
+                if matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
                     return Ok(()); // walls from files: no box known before building
                 }
                 for p in w.min.iter().chain(w.max.iter()) {
@@ -702,8 +699,8 @@ fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
     if c.domain.is_some() {
         for (k, b) in c.fluid_block.iter().enumerate() {
             let corners: Vec<&Vec<f64>> = match (&b.min, &b.max, &b.points) {
-                (Some(a), Some(z), _) if b.shape == "box" => vec![a, z],
-                (_, _, Some(pts)) if b.shape == "polygon" => pts.iter().collect(),
+                (Some(a), Some(z), _) if b.shape == BlockShape::Box => vec![a, z],
+                (_, _, Some(pts)) if b.shape == BlockShape::Polygon => pts.iter().collect(),
                 _ => continue,
             };
             if let Some(p) = corners.iter().find(|p| p.len() == d && outside(p)) {
@@ -819,17 +816,36 @@ fn vector(loaded: &LoadedCase, key: &str, v: &[f64], d: usize) -> Result<(), Cas
     Ok(())
 }
 
+/// How a shape given in the case file by its points lays them out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Outline {
+    /// `min` and `max` corners.
+    Box,
+    /// Closed vertices.
+    Polygon,
+    /// Open vertices.
+    Polyline,
+}
+
+/// The `min`, `max` and `points` of a shape.
+type ShapePoints<'a> = (
+    &'a Option<Vec<f64>>,
+    &'a Option<Vec<f64>>,
+    &'a Option<Vec<Vec<f64>>>,
+);
+
+/// Checks the points of the shape named `shape` at `key` laid out as `outline`: a box's
+/// corners, or the vertices of a 2-D polygon or polyline; other shapes are refused.
 fn shape_points(
     loaded: &LoadedCase,
     key: &str,
     shape: &str,
-    min: &Option<Vec<f64>>,
-    max: &Option<Vec<f64>>,
-    points: &Option<Vec<Vec<f64>>>,
+    outline: Option<Outline>,
+    (min, max, points): ShapePoints,
     d: usize,
 ) -> Result<(), CaseError> {
-    match shape {
-        "box" => {
+    match outline {
+        Some(Outline::Box) => {
             let (Some(lo), Some(hi)) = (min, max) else {
                 return Err(loaded.error(key, "a box needs `min` and `max`"));
             };
@@ -840,14 +856,14 @@ fn shape_points(
             }
             Ok(())
         }
-        "polygon" | "polyline" if d == 2 => {
+        Some(o @ (Outline::Polygon | Outline::Polyline)) if d == 2 => {
             let Some(pts) = points else {
                 return Err(loaded.error(
                     &format!("{key}.points"),
                     "missing: a list of [x, y] vertices",
                 ));
             };
-            let needed = if shape == "polygon" { 3 } else { 2 };
+            let needed = if o == Outline::Polygon { 3 } else { 2 };
             if pts.len() < needed {
                 return Err(loaded.error(
                     &format!("{key}.points"),
@@ -859,7 +875,7 @@ fn shape_points(
             }
             Ok(())
         }
-        other => {
+        _ => {
             let allowed = if d == 2 {
                 "\"box\", \"polygon\" or \"polyline\""
             } else {
@@ -867,7 +883,7 @@ fn shape_points(
             };
             Err(loaded.error(
                 &format!("{key}.shape"),
-                format!("expected {allowed} in {d}-D, found \"{other}\""),
+                format!("expected {allowed} in {d}-D, found \"{shape}\""),
             ))
         }
     }
@@ -882,25 +898,34 @@ fn check_shape(
     allow_particles: bool,
 ) -> Result<(), CaseError> {
     let e = |k: &str, msg: String| Err(loaded.error(k, msg));
-    match s.shape.as_str() {
-        "box" | "polygon" | "polyline" => {
-            shape_points(loaded, key, &s.shape, &s.min, &s.max, &s.points, d)?
+    match s.shape {
+        BlockShape::Box | BlockShape::Polygon | BlockShape::Polyline => {
+            let outline = match s.shape {
+                BlockShape::Box => Outline::Box,
+                BlockShape::Polygon => Outline::Polygon,
+                _ => Outline::Polyline,
+            };
+            let points = (&s.min, &s.max, &s.points);
+            shape_points(loaded, key, s.shape.name(), Some(outline), points, d)?
         }
-        "polygon_file" | "stl" | "particles" => {
-            let needed_dim = match s.shape.as_str() {
-                "polygon_file" => Some(2),
-                "stl" => Some(3),
+        BlockShape::PolygonFile | BlockShape::Stl | BlockShape::Particles => {
+            let needed_dim = match s.shape {
+                BlockShape::PolygonFile => Some(2),
+                BlockShape::Stl => Some(3),
                 _ => None,
             };
             if let Some(nd) = needed_dim {
                 if nd != d {
                     return e(
                         &format!("{key}.shape"),
-                        format!("\"{}\" is a {nd}-D shape, but the case is {d}-D", s.shape),
+                        format!(
+                            "\"{}\" is a {nd}-D shape, but the case is {d}-D",
+                            s.shape.name()
+                        ),
                     );
                 }
             }
-            if s.shape == "particles" && !allow_particles {
+            if s.shape == BlockShape::Particles && !allow_particles {
                 return e(&format!("{key}.shape"), "expected a shape".into());
             }
             match &s.file {
@@ -908,12 +933,15 @@ fn check_shape(
                 _ => {
                     return e(
                         &format!("{key}.file"),
-                        format!("missing: shape \"{}\" reads its data from a file", s.shape),
+                        format!(
+                            "missing: shape \"{}\" reads its data from a file",
+                            s.shape.name()
+                        ),
                     )
                 }
             }
         }
-        "sphere" if d == 3 => {
+        BlockShape::Sphere if d == 3 => {
             let Some(c) = &s.centre else {
                 return e(
                     &format!("{key}.centre"),
@@ -947,7 +975,7 @@ fn check_shape(
             };
             return e(
                 &format!("{key}.shape"),
-                format!("expected {allowed} in {d}-D, found \"{other}\""),
+                format!("expected {allowed} in {d}-D, found \"{}\"", other.name()),
             );
         }
     }

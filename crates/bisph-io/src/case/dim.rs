@@ -3,7 +3,7 @@
 use crate::case::error::CaseError;
 use crate::case::regions::BlockRegion;
 use crate::case::schema::LoadedCase;
-use crate::case::schema::{FluidBlock, WallSpec};
+use crate::case::schema::{BlockShape, FluidBlock, WallShape, WallSpec};
 use bisph_core::bi::ElementIntegrals as WallIntegrals;
 use bisph_core::geometry::{self, ElementShape};
 use bisph_core::Vector;
@@ -28,6 +28,24 @@ pub trait CaseDim: Vector + WallIntegrals {
     ) -> Result<Vec<ElementShape<Self>>, CaseError>;
     /// Lattice points of one `[[fluid_block]]`.
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self>;
+}
+
+/// The elements of wall `k`, about `element_size` across, normals out of the fluid.
+pub fn oriented_wall_shapes<V: CaseDim>(
+    loaded: &LoadedCase,
+    k: usize,
+    element_size: f64,
+) -> Result<Vec<ElementShape<V>>, CaseError> {
+    let w = &loaded.case.wall[k];
+    let mut shapes = V::wall_shapes(loaded, &format!("wall[{k}]"), w, element_size)?;
+    if w.shape == WallShape::Box && w.fluid.as_deref() == Some("outside") {
+        // A box obstacle or body: normals into the box, out of the fluid around it.
+        for s in &mut shapes {
+            s.normal = -s.normal;
+            s.corners.reverse();
+        }
+    }
+    Ok(shapes)
 }
 
 fn points2(points: &Option<Vec<Vec<f64>>>) -> Vec<DVec2> {
@@ -61,15 +79,17 @@ impl CaseDim for DVec2 {
         wall: &WallSpec,
         size: f64,
     ) -> Result<Vec<ElementShape<Self>>, CaseError> {
-        Ok(match wall.shape.as_str() {
-            "box" => geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size),
-            "polygon" => geometry::polyline_elements(&points2(&wall.points), true, size),
+        Ok(match wall.shape {
+            WallShape::Box => {
+                geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size)
+            }
+            WallShape::Polygon => geometry::polyline_elements(&points2(&wall.points), true, size),
             _ => geometry::polyline_elements(&points2(&wall.points), false, size),
         })
     }
     fn fill(block: &FluidBlock, dx: f64) -> Vec<Self> {
-        match block.shape.as_str() {
-            "box" => geometry::lattice_box(vec2(&block.min), vec2(&block.max), dx),
+        match block.shape {
+            BlockShape::Box => geometry::lattice_box(vec2(&block.min), vec2(&block.max), dx),
             _ => geometry::lattice_polygon(&points2(&block.points), dx),
         }
     }
@@ -98,8 +118,10 @@ impl CaseDim for DVec3 {
         wall: &WallSpec,
         size: f64,
     ) -> Result<Vec<ElementShape<Self>>, CaseError> {
-        match wall.shape.as_str() {
-            "mesh" | "capsule" => crate::case::mesh_walls::wall_elements(loaded, key, wall, size),
+        match wall.shape {
+            WallShape::Mesh | WallShape::Capsule => {
+                crate::case::mesh_walls::wall_elements(loaded, key, wall, size)
+            }
             _ => Ok(geometry::box_elements_3d(
                 vec3(&wall.min),
                 vec3(&wall.max),

@@ -4,8 +4,8 @@
 use crate::case::dim::CaseDim;
 use crate::case::error::CaseError;
 use crate::case::regions::BlockRegion;
-use crate::case::schema::Case;
 use crate::case::schema::LoadedCase;
+use crate::case::schema::{BlockShape, Case};
 use bisph_core::packing::{IterationStats, PackParams, PackWalls, Packer};
 use bisph_core::walls::usaw::{self, FitSetting};
 use bisph_core::walls::BoundaryElements;
@@ -21,20 +21,20 @@ pub fn block_points<V: CaseDim>(
 ) -> Result<Vec<V>, CaseError> {
     let block = &loaded.case.fluid_block[k];
     let key = format!("fluid_block[{k}]");
-    if block.shape == "particles" {
+    if block.shape == BlockShape::Particles {
         let file = block.file.clone().unwrap_or_default();
         let rows = crate::formats::mesh_files::read_particles(&loaded.resolve(&file), V::DIM)
             .map_err(|m| loaded.error(&format!("{key}.file"), m))?;
         return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
     }
-    if block.shape == "walls" {
+    if block.shape == BlockShape::Walls {
         return crate::case::wall_fill::fill_inside_walls::<V>(loaded, k, dx);
     }
     if block.bipi() {
         let packed = crate::case::fill::pack_block::<V>(loaded, k, &mut |_| {})?;
         return Ok(packed.packer.positions);
     }
-    let plain = matches!(block.shape.as_str(), "box" | "polygon")
+    let plain = matches!(block.shape, BlockShape::Box | BlockShape::Polygon)
         && block.hole.is_empty()
         && crate::case::regions::transform_of(&block.shape_spec()).is_identity();
     if plain {
@@ -145,7 +145,7 @@ pub fn pack_block<V: CaseDim>(
     let case = &loaded.case;
     let block = &case.fluid_block[k];
     let key = format!("fluid_block[{k}]");
-    if block.shape == "particles" {
+    if block.shape == BlockShape::Particles {
         return Err(loaded.error(
             &format!("{key}.shape"),
             "a \"particles\" block has no geometry to pack",

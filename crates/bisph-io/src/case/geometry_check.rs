@@ -5,7 +5,7 @@
 
 use crate::case::build::Layout;
 use crate::case::error::CaseError;
-use crate::case::schema::LoadedCase;
+use crate::case::schema::{LoadedCase, WallShape};
 use bisph_core::{Simulation, Vector};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -56,9 +56,9 @@ fn check_self_intersections(loaded: &LoadedCase) -> Result<(), CaseError> {
         return Ok(());
     }
     for (k, wall) in loaded.case.wall.iter().enumerate() {
-        let closed = match wall.shape.as_str() {
-            "polygon" => true,
-            "polyline" => false,
+        let closed = match wall.shape {
+            WallShape::Polygon => true,
+            WallShape::Polyline => false,
             _ => continue,
         };
         let points: Vec<DVec2> = wall
@@ -87,7 +87,7 @@ fn check_self_intersections(loaded: &LoadedCase) -> Result<(), CaseError> {
                     side(j),
                     num(at.x),
                     num(at.y),
-                    wall.shape
+                    wall.shape.name()
                 ),
             ));
         }

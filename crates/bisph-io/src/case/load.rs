@@ -137,13 +137,14 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
     for line in before.lines() {
         let l = line.trim();
         if let Some(name) = l.strip_prefix("[[").and_then(|s| s.strip_suffix("]]")) {
+            let path = indexed_path(name, &index);
             let n = index
-                .entry(name.to_string())
+                .entry(path.clone())
                 .and_modify(|n| *n += 1)
                 .or_insert(0);
-            table = format!("{name}[{n}]");
+            table = format!("{path}[{n}]");
         } else if let Some(name) = l.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-            table = name.to_string();
+            table = indexed_path(name, &index);
         }
     }
     let line_start = before.rfind('\n').map_or(0, |k| k + 1);
@@ -151,11 +152,12 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
     // An error at a table header (an unknown table) is the header's own key.
     let header = line.trim();
     if let Some(name) = header.strip_prefix("[[").and_then(|s| s.strip_suffix("]]")) {
-        let n = index.get(name).map_or(0, |n| n + 1);
-        return format!("{name}[{n}]");
+        let path = indexed_path(name, &index);
+        let n = index.get(&path).map_or(0, |n| n + 1);
+        return format!("{path}[{n}]");
     }
     if let Some(name) = header.strip_prefix('[').and_then(|s| s.strip_suffix(']')) {
-        return name.to_string();
+        return indexed_path(name, &index);
     }
     let key = line
         .split('=')
@@ -169,6 +171,26 @@ fn key_of_error(text: &str, e: &toml::de::Error) -> String {
         (false, true) => table,
         (false, false) => format!("{table}.{key}"),
     }
+}
+
+/// The dotted table name `name` with the current entry of every enclosing array of tables
+/// (`fluid_block.hole` inside the second `[[fluid_block]]` is `fluid_block[1].hole`), given
+/// the last index of each array seen so far.
+fn indexed_path(name: &str, index: &std::collections::HashMap<String, usize>) -> String {
+    let parts: Vec<&str> = name.split('.').collect();
+    let mut path = String::new();
+    for (k, part) in parts.iter().enumerate() {
+        if k > 0 {
+            path.push('.');
+        }
+        path.push_str(part.trim());
+        if k + 1 < parts.len() {
+            if let Some(n) = index.get(&path) {
+                path = format!("{path}[{n}]");
+            }
+        }
+    }
+    path
 }
 
 /// ` at line L, column C` (1-based, columns in characters) of the byte offset `at` in `text`.
@@ -204,6 +226,51 @@ mod tests {
             e.message.contains("not valid TOML at line 7, column 6"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn unknown_names_give_the_key_the_value_and_the_choices() {
+        let hole = "[[fluid_block.hole]]\nshape = \"box\"\nmin = [0.1, 0.1]\nmax = [0.2, 0.2]\n";
+        let second = "[[fluid_block]]\nshape = \"box\"\nmin = [0.5, 0.5]\nmax = [0.9, 0.9]\n";
+        let text = CASE.replace("[[wall]]", &format!("{hole}{second}{hole}[[wall]]"));
+        assert!(parse_case("c.toml", &text, &[]).is_ok());
+        let text = CASE.replace(
+            "[[wall]]",
+            &format!("{hole}{second}{}[[wall]]", hole.replace("box", "circle")),
+        );
+        for (text, key, value) in [
+            (text, "fluid_block[1].hole[0].shape", "circle"),
+            (
+                CASE.replacen("\"box\"", "\"cricle\"", 1),
+                "fluid_block[0].shape",
+                "cricle",
+            ),
+            (
+                CASE.replacen(
+                    "\"box\"\nmin = [0.0, 0.0]\nmax = [1.0",
+                    "\"mesj\"\nmin = [0.0, 0.0]\nmax = [1.0",
+                    1,
+                ),
+                "wall[0].shape",
+                "mesj",
+            ),
+            (
+                CASE.replace("max = [0.5, 0.5]", "max = [0.5, 0.5]\nfill = \"bipy\""),
+                "fluid_block[0].fill",
+                "bipy",
+            ),
+            (
+                format!("{CASE}[[probe]]\nname = \"p\"\nkind = \"speed\"\nposition = [0.5, 0.5]\n"),
+                "probe[0].kind",
+                "speed",
+            ),
+        ] {
+            let e = parse_case("c.toml", &text, &[]).unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+            assert!(e.message.contains(&format!("`{value}`")), "{e}");
+            assert!(e.message.contains("expected one of"), "{e}");
+            assert!(e.to_string().starts_with("c.toml: "), "{e}");
+        }
     }
 
     #[test]

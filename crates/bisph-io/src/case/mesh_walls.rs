@@ -7,7 +7,7 @@ use crate::case::schema::LoadedCase;
 
 use crate::case::error::CaseError;
 use crate::case::regions::transform_from;
-use crate::case::schema::WallSpec;
+use crate::case::schema::{WallShape, WallSpec};
 use crate::formats::mesh_files::{read_obj, read_stl_facets, Transform};
 use bisph_core::geometry::ElementShape;
 use bisph_core::surface::{Capsule, Surface};
@@ -23,7 +23,7 @@ pub fn wall_transform(w: &WallSpec) -> Transform {
 pub fn fluid_outside(w: &WallSpec) -> bool {
     match w.fluid.as_deref() {
         Some(f) => f == "outside",
-        None => w.shape == "capsule",
+        None => w.shape == WallShape::Capsule,
     }
 }
 
@@ -72,7 +72,7 @@ pub fn check_wall(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result<(), Ca
             ));
         }
     }
-    if w.shape == "capsule" && w.closed == Some(false) {
+    if w.shape == WallShape::Capsule && w.closed == Some(false) {
         return Err(loaded.error(&format!("{key}.closed"), "a capsule is always closed"));
     }
     if w.closed == Some(false) && w.fluid.is_some() {
@@ -94,8 +94,8 @@ pub fn wall_surface(
 ) -> Result<Surface, CaseError> {
     let bad = |m: String| loaded.error(key, m);
     let closed = w.closed.unwrap_or(true);
-    let mut surface = match w.shape.as_str() {
-        "capsule" => {
+    let mut surface = match w.shape {
+        WallShape::Capsule => {
             let Some(c) = &w.capsule else {
                 return Err(loaded.error(
                     &format!("{key}.capsule"),
@@ -117,7 +117,7 @@ pub fn wall_surface(
                 )
             })?
         }
-        "mesh" => {
+        WallShape::Mesh => {
             let Some(file) = &w.file else {
                 return Err(loaded.error(&format!("{key}.file"), "missing: an .stl or .obj file"));
             };
@@ -148,7 +148,7 @@ pub fn wall_surface(
             Surface::from_polygons(&polygons, normals.as_deref(), 1e-9 * size.max(1e-300))
                 .map_err(|e| loaded.error(&format!("{key}.file"), format!("{}: {e}", file)))?
         }
-        other => return Err(bad(format!("\"{other}\" is not a mesh wall"))),
+        other => return Err(bad(format!("\"{}\" is not a mesh wall", other.name()))),
     };
     surface
         .check_topology(closed)

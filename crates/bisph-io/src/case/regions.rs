@@ -5,7 +5,7 @@
 use crate::case::schema::LoadedCase;
 
 use crate::case::error::CaseError;
-use crate::case::schema::{unit_factor, Angles, ShapeSpec};
+use crate::case::schema::{unit_factor, Angles, BlockShape, ShapeSpec};
 use crate::formats::mesh_files::{read_polygon_file, read_stl, Transform};
 use bisph_core::geometry::ElementShape;
 use bisph_core::region::{PolygonRegion, TriMesh};
@@ -70,19 +70,19 @@ fn err(loaded: &LoadedCase, key: &str, message: String) -> CaseError {
 /// The loops of a 2-D shape, transformed.
 fn loops_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec) -> Result<Vec<Vec<DVec2>>, CaseError> {
     let t = transform_of(s);
-    let raw: Vec<Vec<DVec2>> = match s.shape.as_str() {
-        "box" => {
+    let raw: Vec<Vec<DVec2>> = match s.shape {
+        BlockShape::Box => {
             let lo = DVec2::from_slice(s.min.as_deref().unwrap_or(&[0.0, 0.0]));
             let hi = DVec2::from_slice(s.max.as_deref().unwrap_or(&[0.0, 0.0]));
             vec![vec![lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)]]
         }
-        "polygon" => vec![s
+        BlockShape::Polygon => vec![s
             .points
             .iter()
             .flatten()
             .map(|p| DVec2::from_slice(p))
             .collect()],
-        "polygon_file" => {
+        BlockShape::PolygonFile => {
             let file = s.file.clone().unwrap_or_default();
             read_polygon_file(&loaded.resolve(&file))
                 .map_err(|m| err(loaded, &format!("{key}.file"), m))?
@@ -91,7 +91,7 @@ fn loops_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec) -> Result<Vec<Vec<DVe
             return Err(err(
                 loaded,
                 &format!("{key}.shape"),
-                format!("\"{other}\" is not a closed 2-D shape"),
+                format!("\"{}\" is not a closed 2-D shape", other.name()),
             ))
         }
     };
@@ -144,8 +144,8 @@ pub fn region_2d(
 /// The closed mesh of a 3-D shape, transformed.
 fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<TriMesh, CaseError> {
     let t = transform_of(s);
-    let soup: Vec<[DVec3; 3]> = match s.shape.as_str() {
-        "box" => {
+    let soup: Vec<[DVec3; 3]> = match s.shape {
+        BlockShape::Box => {
             let lo = DVec3::from_slice(s.min.as_deref().unwrap_or(&[0.0; 3]));
             let hi = DVec3::from_slice(s.max.as_deref().unwrap_or(&[0.0; 3]));
             let v = |i: usize| {
@@ -168,7 +168,7 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
                 .flat_map(|f| [[v(f[0]), v(f[1]), v(f[2])], [v(f[0]), v(f[2]), v(f[3])]])
                 .collect()
         }
-        "sphere" => {
+        BlockShape::Sphere => {
             let c = DVec3::from_slice(s.centre.as_deref().unwrap_or(&[0.0; 3]));
             let r = s.radius.unwrap_or(1.0);
             // Default: icosphere edges of about 2 dx (edge ~ 1.05 r / 2^n).
@@ -178,7 +178,7 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
             let m = TriMesh::icosphere(c, r, n);
             (0..m.triangles.len()).map(|k| m.triangle(k)).collect()
         }
-        "stl" => {
+        BlockShape::Stl => {
             let file = s.file.clone().unwrap_or_default();
             read_stl(&loaded.resolve(&file)).map_err(|m| err(loaded, &format!("{key}.file"), m))?
         }
@@ -186,7 +186,7 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
             return Err(err(
                 loaded,
                 &format!("{key}.shape"),
-                format!("\"{other}\" is not a closed 3-D shape"),
+                format!("\"{}\" is not a closed 3-D shape", other.name()),
             ))
         }
     };

@@ -274,12 +274,12 @@ impl Case {
     /// or, with `boundary = "usaw"` in 2-D, a lattice block whose `fill` is left out (on the
     /// bare lattice the usaw operators are far from rest next to the walls).
     pub fn fills_for_usaw(&self, block: &FluidBlock) -> bool {
-        match block.fill.as_deref() {
-            Some(fill) => fill == "usaw",
+        match block.fill {
+            Some(fill) => fill == FillName::Usaw,
             None => {
                 self.boundary == BoundaryName::Usaw
                     && self.dim == 2
-                    && block.shape != "particles"
+                    && block.shape != BlockShape::Particles
                     && !block.solid
             }
         }
@@ -614,6 +614,97 @@ pub enum InitialPressure {
     Named(String),
 }
 
+/// Shape of a fluid block or of a hole cut out of one (`shape`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum BlockShape {
+    /// An axis-aligned box between `min` and `max`.
+    Box,
+    /// A polygon through `points` (2-D).
+    Polygon,
+    /// An open polyline through `points` (2-D; not a region: refused where one is needed).
+    Polyline,
+    /// A polygon read from `file` (2-D).
+    PolygonFile,
+    /// A closed triangle mesh read from an STL `file` (3-D).
+    Stl,
+    /// A generated closed sphere mesh (3-D).
+    Sphere,
+    /// Particle positions read from a CSV `file` (fluid blocks only).
+    Particles,
+    /// The fluid inside the case's walls below `level` (fluid blocks only).
+    Walls,
+}
+
+impl BlockShape {
+    /// The name a case file gives the shape.
+    pub fn name(self) -> &'static str {
+        match self {
+            BlockShape::Box => "box",
+            BlockShape::Polygon => "polygon",
+            BlockShape::Polyline => "polyline",
+            BlockShape::PolygonFile => "polygon_file",
+            BlockShape::Stl => "stl",
+            BlockShape::Sphere => "sphere",
+            BlockShape::Particles => "particles",
+            BlockShape::Walls => "walls",
+        }
+    }
+}
+
+/// How a fluid block's particles are placed (`fill`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum FillName {
+    /// On the lattice.
+    Lattice,
+    /// Packed with BIPI (paper 4) before the run.
+    Bipi,
+    /// The lattice relaxed to fit usaw walls (2-D, `boundary = "usaw"`).
+    Usaw,
+}
+
+/// Shape of a `[[wall]]` (`shape`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum WallShape {
+    /// An axis-aligned box between `min` and `max`, sides optionally `open`.
+    Box,
+    /// An open polyline through `points` (2-D).
+    Polyline,
+    /// A closed polygon through `points` (2-D).
+    Polygon,
+    /// A triangle mesh read from an STL or OBJ `file` (3-D).
+    Mesh,
+    /// A generated Apollo-like `capsule` (3-D).
+    Capsule,
+}
+
+impl WallShape {
+    /// The name a case file gives the shape.
+    pub fn name(self) -> &'static str {
+        match self {
+            WallShape::Box => "box",
+            WallShape::Polyline => "polyline",
+            WallShape::Polygon => "polygon",
+            WallShape::Mesh => "mesh",
+            WallShape::Capsule => "capsule",
+        }
+    }
+}
+
+/// What a probe measures (`kind`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ProbeKindName {
+    /// Fluid pressure, Shepard-normalised.
+    Pressure,
+    /// Wall pressure, `2 sum p W V`.
+    WallPressure,
+    /// Water height of the vertical column through the position.
+    Height,
+}
+
 /// `[[fluid_block]]`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -621,7 +712,7 @@ pub struct FluidBlock {
     /// `"box"`, `"polygon"` (2-D), `"polygon_file"` (2-D), `"stl"` (3-D), `"sphere"` (3-D,
     /// a generated closed mesh), `"particles"` (positions from a CSV file) or `"walls"` (the
     /// fluid inside the case's walls below `level`).
-    pub shape: String,
+    pub shape: BlockShape,
     /// `shape = "walls"`: the height along `-g` up to which the walls are filled.
     pub level: Option<f64>,
     /// `shape = "walls"`: the least distance of a particle from a wall, in units of the
@@ -658,7 +749,7 @@ pub struct FluidBlock {
     /// is at rest (`bisph_core::walls::usaw::relax_positions`, `balance_positions`). Default:
     /// `"usaw"` for 2-D blocks with `boundary = "usaw"`, else `"lattice"`
     /// ([`Case::fills_for_usaw`]).
-    pub fill: Option<String>,
+    pub fill: Option<FillName>,
     /// Particle spacing of this block (default `resolution.dx`).
     pub dx: Option<f64>,
     /// Particles of a solid body: packed by `bisph pack`, not run as fluid.
@@ -719,11 +810,11 @@ pub enum Angles {
 }
 
 /// `[[fluid_block.hole]]`: a shape, as in a fluid block.
-#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeSpec {
     /// `"box"`, `"polygon"`, `"polygon_file"`, `"stl"` or `"sphere"`.
-    pub shape: String,
+    pub shape: BlockShape,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
@@ -752,7 +843,7 @@ impl FluidBlock {
     /// The block's own shape (without its holes).
     pub fn shape_spec(&self) -> ShapeSpec {
         ShapeSpec {
-            shape: self.shape.clone(),
+            shape: self.shape,
             min: self.min.clone(),
             max: self.max.clone(),
             points: self.points.clone(),
@@ -769,7 +860,7 @@ impl FluidBlock {
 
     /// `true` when the block asks to be packed with BIPI.
     pub fn bipi(&self) -> bool {
-        self.fill.as_deref() == Some("bipi")
+        self.fill == Some(FillName::Bipi)
     }
 }
 
@@ -809,7 +900,7 @@ pub struct PackSection {
 pub struct WallSpec {
     /// `"box"`, `"polyline"` or `"polygon"` (2-D); `"mesh"` (an STL or OBJ file) or
     /// `"capsule"` (3-D).
-    pub shape: String,
+    pub shape: WallShape,
     /// Mesh file (`.stl`, binary or ASCII, or `.obj`), relative to the case file's folder.
     pub file: Option<String>,
     /// Length unit of the mesh file: `"m"` (default), `"cm"` or `"mm"`.
@@ -975,7 +1066,7 @@ pub struct ProbeSpec {
     pub name: String,
     /// `"pressure"` (fluid, Shepard-normalised), `"wall_pressure"` (`2 sum p W V`) or
     /// `"height"` (water height of the vertical column through the position).
-    pub kind: String,
+    pub kind: ProbeKindName,
     /// Position.
     pub position: Vec<f64>,
 }

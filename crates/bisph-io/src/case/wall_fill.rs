@@ -5,7 +5,7 @@
 //! `clearance` from every wall. Obstacles and bodies are cut out the same way: a point inside
 //! one meets its bottom going down, which faces up, or its top going up, which faces down.
 
-use crate::case::build::oriented_wall_shapes;
+use crate::case::dim::oriented_wall_shapes;
 use crate::case::dim::CaseDim;
 use crate::case::error::CaseError;
 use crate::case::schema::LoadedCase;

@@ -17,7 +17,7 @@
 
 use crate::case::dim::CaseDim;
 use crate::case::fill::{pack_block, PackedBlock};
-use crate::case::schema::LoadedCase;
+use crate::case::schema::{BlockShape, LoadedCase};
 use crate::formats::files::{at, write_atomic};
 use crate::formats::plot::{write_png, Plot, Series as PlotSeries, Style};
 use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray};
@@ -214,7 +214,7 @@ fn pack_dim<V: CaseDim>(
         .map_err(|e: toml::de::Error| RunError::Case(loaded.error("", e.to_string())))?;
     let mut kept_blocks = Vec::new();
     for (k, block) in case.fluid_block.iter().enumerate() {
-        if block.shape == "particles" {
+        if block.shape == BlockShape::Particles {
             if let Some(b) = case_block(&packed_doc, k) {
                 kept_blocks.push(b.clone());
             }

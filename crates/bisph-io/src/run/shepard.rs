@@ -15,7 +15,7 @@
 use crate::case::build::build_simulation;
 
 use crate::case::dim::CaseDim;
-use crate::case::schema::LoadedCase;
+use crate::case::schema::{LoadedCase, WallShape};
 use bisph_core::neighbours::CellGrid;
 use bisph_core::walls::shepard::ShepardKind;
 use bisph_core::walls::{geometric_shepard, integrated_shepard};
@@ -205,11 +205,11 @@ fn open_walls(loaded: &LoadedCase) -> Vec<String> {
         .wall
         .iter()
         .enumerate()
-        .filter_map(|(k, w)| match w.shape.as_str() {
-            "box" if !w.open.is_empty() => {
+        .filter_map(|(k, w)| match w.shape {
+            WallShape::Box if !w.open.is_empty() => {
                 Some(format!("wall[{k}], a box open at {}", w.open.join(" and ")))
             }
-            "polyline" => Some(format!("wall[{k}], a polyline")),
+            WallShape::Polyline => Some(format!("wall[{k}], a polyline")),
             _ => None,
         })
         .collect()

@@ -108,13 +108,12 @@ pub struct FitSetting<'a, V: Vector> {
 pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relaxation {
     let FitSetting {
         kernel,
-        dx,
         volume,
         vertices,
         elements,
         up,
         surface,
-        max_iterations,
+        ..
     } = *fit;
     let support = kernel.support;
     let mut element_grid = CellGrid::new(support + elements.max_reach);
@@ -157,16 +156,7 @@ pub fn relax_positions<V: Vector>(fit: &FitSetting<'_, V>, x: &mut [V]) -> Relax
     let depth = |p: V| surface - p.dot(up);
     let step = |_: V, r: V| r * -diffusion;
     let crosses = |from: V, to: V| path_crosses(elements, &element_grid, from, to);
-    shift_until_still(
-        x,
-        dx,
-        depth,
-        support,
-        max_iterations,
-        measure,
-        step,
-        crosses,
-    )
+    shift_until_still(x, fit, depth, measure, step, crosses)
 }
 
 /// Second stage of [`relax_positions`], for still water: shifts the fluid particles `x` along
@@ -190,13 +180,12 @@ pub fn balance_positions<V: Vector>(
 ) -> Relaxation {
     let FitSetting {
         kernel,
-        dx,
         volume,
         vertices,
         elements,
         up,
         surface,
-        max_iterations,
+        ..
     } = *fit;
     let support = kernel.support;
     let mut grid = CellGrid::new(support + elements.max_reach);
@@ -246,16 +235,7 @@ pub fn balance_positions<V: Vector>(
         a * (0.5 * kernel.h * kernel.h / (2.0 * pa / density(pa) + g * kernel.h))
     };
     let crosses = |from: V, to: V| path_crosses(elements, &grid, from, to);
-    shift_until_still(
-        x,
-        dx,
-        depth,
-        support,
-        max_iterations,
-        accelerations,
-        step,
-        crosses,
-    )
+    shift_until_still(x, fit, depth, accelerations, step, crosses)
 }
 
 /// `true` when the straight path from `from` to `to` touches a wall element (`grid` holds the
@@ -282,14 +262,13 @@ fn path_crosses<V: Vector>(
 /// (`depth(x_a)` below the surface).
 fn shift_until_still<V: Vector>(
     x: &mut [V],
-    dx: f64,
+    fit: &FitSetting<'_, V>,
     depth: impl Fn(V) -> f64,
-    support: f64,
-    max_iterations: usize,
     field: impl Fn(&[V]) -> Vec<V>,
     step: impl Fn(V, V) -> V,
     crosses: impl Fn(V, V) -> bool,
 ) -> Relaxation {
+    let (dx, support, max_iterations) = (fit.dx, fit.kernel.support, fit.max_iterations);
     let largest = |x: &[V], f: &[V]| {
         let (mut all, mut deep) = (0.0f64, 0.0f64);
         for (&p, fa) in x.iter().zip(f) {
