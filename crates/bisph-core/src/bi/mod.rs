@@ -34,6 +34,7 @@
 //! the functions [`shepard`] and [`outline_shepard`], which pick the implementation of the
 //! concrete type ([`Vector::as_concrete`]); 2-D-only code calls [`segment`] directly.
 
+pub mod gauss;
 pub mod polar;
 pub mod polygon;
 pub mod segment;
@@ -60,6 +61,9 @@ pub trait ElementIntegrals: Vector {
     /// `int_{S cap B(x, radius)} W(|y - x|) dS` over the part of the element within `radius`
     /// (at most the support `2h`) of `x` (paper 4, eq 3; paper 3, eq 9).
     fn kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64;
+
+    /// `int_S W(|y - x|) dS` over the whole element by a low-order Gauss rule ([`gauss`]).
+    fn gauss_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self]) -> f64;
 
     /// `grad gamma_as`, the element's share of the gradient of the Shepard factor,
     /// `-n int_{S cap B(x, radius)} W dS` (paper 3, eq 9; paper 4, eq 3), pointing into the
@@ -138,6 +142,19 @@ pub fn kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V], radius
     ) {
         (Concrete::Two(x), Concrete::Two(c)) => DVec2::kernel_integral(kernel, x[0], c, radius),
         (Concrete::Three(x), Concrete::Three(c)) => DVec3::kernel_integral(kernel, x[0], c, radius),
+        _ => unreachable!("a point and its element's corners share one vector type"),
+    }
+}
+
+/// [`ElementIntegrals::gauss_kernel_integral`] for any vector type.
+#[inline(always)]
+pub fn gauss_kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V]) -> f64 {
+    match (
+        V::as_concrete(std::slice::from_ref(&x)),
+        V::as_concrete(corners),
+    ) {
+        (Concrete::Two(x), Concrete::Two(c)) => DVec2::gauss_kernel_integral(kernel, x[0], c),
+        (Concrete::Three(x), Concrete::Three(c)) => DVec3::gauss_kernel_integral(kernel, x[0], c),
         _ => unreachable!("a point and its element's corners share one vector type"),
     }
 }

@@ -274,6 +274,9 @@ impl ElementIntegrals for DVec3 {
     fn kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
         polar::kernel_integral(kernel, x, corners, radius)
     }
+    fn gauss_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self]) -> f64 {
+        super::gauss::polygon(kernel, x, corners)
+    }
     fn polar_shepard(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
         polar::shepard(kernel, x, corners, normal)
     }

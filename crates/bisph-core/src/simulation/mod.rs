@@ -121,13 +121,8 @@ pub struct SimConfig<V: Vector> {
     pub flux: Option<FluxControl<V>>,
     /// Density diffusion form (its hydrostatic correction is [`SimConfig::delta_hydrostatic`]).
     pub diffusion: DiffusionChoice,
-    /// The density power `k` of paper 3, eqs 37-38 (0 or 1).
-    pub density_power: u8,
     /// Initial particle spacing `dx` (vertex volumes, `K = c0 dx / eta`).
     pub particle_spacing: f64,
-    /// Density by summation, `gamma rho = sum_P m W + C` (paper 3, eqs 13 and 84; usaw only,
-    /// explicit Verlet), instead of the continuity equation (eq 12).
-    pub summation_density: bool,
 }
 
 /// Scratch buffers reused every step.
@@ -426,7 +421,7 @@ impl<V: Vector> Simulation<V> {
 
     /// `true` when the densities come from summation (paper 3, eq 84).
     pub(crate) fn summation(&self) -> bool {
-        self.config.summation_density && self.config.wall_model.has_vertex_particles()
+        self.config.wall_model.summation_density()
     }
 
     /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
@@ -534,7 +529,7 @@ impl<V: Vector> Simulation<V> {
             },
             viscosity: c.viscosity,
             body_force: self.body_force,
-            density_power: c.density_power,
+            density_power: c.wall_model.density_power(),
             summation_density: self.summation(),
         }
     }
@@ -771,7 +766,6 @@ impl<V: Vector> Simulation<V> {
         } = walls;
         let inputs = WallModelInputs {
             gravity: model.gravity,
-            density_power: model.density_power,
             vertices,
             listed: self.scratch.wall_pairs_listed.then_some(ListedEnergyWalls {
                 particle_elements: &self.scratch.particle_elements,
@@ -833,7 +827,6 @@ impl<V: Vector> Simulation<V> {
         let walls = &self.walls;
         let inputs = WallModelInputs {
             gravity: model.gravity,
-            density_power: model.density_power,
             vertices: &walls.vertices,
             listed: None,
         };

@@ -51,6 +51,21 @@ impl WallModelChoice {
         matches!(self, WallModelChoice::Usaw(_))
     }
 
+    /// The density power `k` of paper 3, eqs 37-38: the semi-analytical walls' choice, 0
+    /// (paper 1, eqs 10-11) for the other models.
+    pub fn density_power(&self) -> u8 {
+        match self {
+            WallModelChoice::Usaw(p) => p.density_power,
+            _ => 0,
+        }
+    }
+
+    /// `true` when the densities come from summation over fluid and vertex particles
+    /// (paper 3, eqs 13 and 84): the semi-analytical walls' choice.
+    pub fn summation_density(&self) -> bool {
+        matches!(self, WallModelChoice::Usaw(p) if p.summation_density)
+    }
+
     /// `true` when the wall model itself evaluates the geometric Shepard factor (paper 2):
     /// geometric renormalisation, or gamma of the semi-analytical or integrated walls.
     pub fn evaluates_geometric_gamma(&self) -> bool {
@@ -69,6 +84,11 @@ pub struct UsawParams {
     /// Walls push but never pull: the wall terms use the non-negative parts of the particle,
     /// vertex and segment pressures ([`crate::walls::usaw::UsawWalls::no_tension`]).
     pub no_wall_tension: bool,
+    /// The density power `k` of paper 3, eqs 37-38 (0 or 1).
+    pub density_power: u8,
+    /// Density by summation, `gamma rho = sum_P m W + C` (paper 3, eqs 13 and 84; explicit
+    /// Verlet), instead of the continuity equation (eq 12).
+    pub summation_density: bool,
 }
 
 /// Work done with the wall model in use, whatever its type.
@@ -83,8 +103,6 @@ pub(crate) trait WallModelTask<V: Vector> {
 pub(crate) struct WallModelInputs<'a, V: Vector> {
     /// Gravity (the hydrostatic correction of the extrapolated wall pressure).
     pub gravity: V,
-    /// The density power `k` of paper 3, eqs 37-38.
-    pub density_power: u8,
     /// The vertex particles of the semi-analytical walls.
     pub vertices: &'a Vertices<V>,
     /// The energy-conserving walls' listed pairs, when listed (inside a midpoint step).
@@ -110,7 +128,7 @@ impl WallModelChoice {
             }),
             WallModelChoice::Usaw(params) => task.run(&UsawWalls {
                 vertices: inputs.vertices,
-                density_power: inputs.density_power,
+                density_power: params.density_power,
                 no_tension: params.no_wall_tension,
             }),
         }

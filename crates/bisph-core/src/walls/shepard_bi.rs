@@ -30,6 +30,10 @@ pub enum BoundaryQuadrature {
     /// pressure meets walls that cut the kernel support, corners included, without a
     /// quadrature error.
     Exact,
+    /// `int_{S_k} W dS` by a low-order Gauss rule (2 points on a segment, 2 x 2 on a
+    /// quadrilateral, 3 on a triangle, [`crate::bi::gauss`]): within about 5e-4 of
+    /// `Exact` near edges and corners, at a fraction of its cost in 3-D.
+    Gauss,
 }
 
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
@@ -110,7 +114,9 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         let mut velocity_divergence = 0.0;
         let radius = match self.quadrature {
             BoundaryQuadrature::Centre => kernel.support,
-            BoundaryQuadrature::Exact => kernel.support + elements.max_reach,
+            BoundaryQuadrature::Exact | BoundaryQuadrature::Gauss => {
+                kernel.support + elements.max_reach
+            }
         };
         grid.for_each_sparse_neighbour(x, &elements.centre, radius, |k, _, r| {
             let ws = match self.quadrature {
@@ -124,6 +130,11 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
                         &elements.corners[corners],
                         kernel.support,
                     )
+                }
+                BoundaryQuadrature::Gauss => {
+                    let corners =
+                        elements.corner_start[k] as usize..elements.corner_start[k + 1] as usize;
+                    crate::bi::gauss_kernel_integral(kernel, x, &elements.corners[corners])
                 }
             };
             let n = elements.normal[k];

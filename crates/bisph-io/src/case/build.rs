@@ -88,13 +88,7 @@ pub fn build_simulation_with_layout<V: CaseDim>(
         domain_max,
         wall_model: wall_model_of(case),
         diffusion: diffusion_of(case),
-        density_power: if case.boundary == BoundaryName::Usaw {
-            case.usaw.density_power
-        } else {
-            0
-        },
         particle_spacing: case.resolution.dx,
-        summation_density: case.usaw.continuity == ContinuityName::Summation,
         reorder_interval: 1,
         neighbour_skin: case.time.neighbour_skin,
         elastic_bounce: case.elastic_bounce,
@@ -490,6 +484,7 @@ fn wall_model_of(case: &Case) -> WallModelChoice {
             match case.boundary_quadrature() {
                 BoundaryQuadratureName::Centre => BoundaryQuadrature::Centre,
                 BoundaryQuadratureName::Exact => BoundaryQuadrature::Exact,
+                BoundaryQuadratureName::Gauss => BoundaryQuadrature::Gauss,
             },
         ),
         BoundaryName::Usaw => WallModelChoice::Usaw(UsawParams {
@@ -500,6 +495,8 @@ fn wall_model_of(case: &Case) -> WallModelChoice {
             },
             geometric_gamma: case.usaw.gamma == UsawGammaName::Geometric,
             no_wall_tension: !case.usaw.wall_tension,
+            density_power: case.usaw.density_power,
+            summation_density: case.usaw.continuity == ContinuityName::Summation,
         }),
     }
 }

@@ -366,7 +366,7 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
 }
 
 /// Checks the `fill` of the block at `key`: `"usaw"` for a 2-D lattice block with usaw walls,
-/// `"bipi"` for a block that is not already particles.
+/// `"bipi"` for a closed shape (not particles, not the water inside the walls).
 fn check_fill(
     loaded: &LoadedCase,
     key: &str,
@@ -380,6 +380,12 @@ fn check_fill(
         return Err(loaded.error(
             &format!("{key}.fill"),
             "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"",
+        ));
+    }
+    if fill == FillName::Bipi && b.shape == BlockShape::Walls {
+        return Err(loaded.error(
+            &format!("{key}.fill"),
+            "a shape = \"walls\" block is filled on the lattice, trimmed to the walls; BIPI packs a closed shape (box, polygon, polygon_file, stl or sphere)",
         ));
     }
     if fill == FillName::Bipi && b.shape == BlockShape::Particles {

@@ -23,6 +23,8 @@ pub enum BoundaryQuadratureName {
     Centre,
     /// `int_S W dS` exactly (paper 3, eq 9; paper 4, eq 3).
     Exact,
+    /// `int_S W dS` by a low-order Gauss rule per element.
+    Gauss,
 }
 
 /// Wall model name.
@@ -208,12 +210,12 @@ impl Case {
     }
 
     /// The `bi` boundary quadrature in force: `boundary_quadrature`, or exact in 2-D (closed
-    /// form per segment) and at the element centre in 3-D.
+    /// form per segment) and a Gauss rule per element in 3-D.
     pub fn boundary_quadrature(&self) -> BoundaryQuadratureName {
         self.boundary_quadrature.unwrap_or(if self.dim == 2 {
             BoundaryQuadratureName::Exact
         } else {
-            BoundaryQuadratureName::Centre
+            BoundaryQuadratureName::Gauss
         })
     }
 
