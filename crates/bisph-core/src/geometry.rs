@@ -300,6 +300,111 @@ pub fn check_edges<F: AsRef<[u32]>>(faces: &[F], closed: bool) -> Result<(), Edg
     }
 }
 
+/// Sides of a circle of `radius` drawn with chords of about `size` (at least 16).
+fn circle_sides(radius: f64, size: f64) -> usize {
+    ((std::f64::consts::TAU * radius / size).ceil() as usize).max(16)
+}
+
+/// A circle as a polygon, counter-clockwise, with chords of about `size` (at least 16 sides);
+/// its vertices lie on the circle.
+pub fn circle_points(centre: DVec2, radius: f64, size: f64) -> Vec<DVec2> {
+    let n = circle_sides(radius, size);
+    (0..n)
+        .map(|k| {
+            let phi = std::f64::consts::TAU * k as f64 / n as f64;
+            centre + DVec2::new(phi.cos(), phi.sin()) * radius
+        })
+        .collect()
+}
+
+/// A cylinder of `radius` about the axis from `start` to `end`, as faces of 3 or 4 corners
+/// counter-clockwise seen from outside (normals out of the cylinder): the side in quads about
+/// `size` wide and long, and the end caps kept in `caps` (`[start, end]`) in rings of quads
+/// about `size` apart around a fan of triangles, all on the same angular division so that the
+/// faces meet edge to edge. Closed when both caps are kept; a cap left out leaves that end's
+/// rim as the open edge. `None` when the axis has no length or the radius or size is not
+/// positive.
+pub fn cylinder_faces(
+    start: DVec3,
+    end: DVec3,
+    radius: f64,
+    size: f64,
+    caps: [bool; 2],
+) -> Option<Vec<Vec<DVec3>>> {
+    let axis = end - start;
+    let length = axis.length();
+    if !(length > 0.0 && radius > 0.0 && size > 0.0 && length.is_finite() && radius.is_finite()) {
+        return None;
+    }
+    let k = axis / length;
+    let e1 = k.any_orthonormal_vector();
+    let e2 = k.cross(e1);
+    let n = circle_sides(radius, size);
+    let rings = ((radius / size).ceil() as usize).max(1);
+    let layers = ((length / size).ceil() as usize).max(1);
+    // Point at radius fraction `rho`, angle index `a`, height fraction `z` along the axis.
+    let at = |rho: f64, a: usize, z: f64| {
+        let phi = std::f64::consts::TAU * (a % n) as f64 / n as f64;
+        start + axis * z + (e1 * phi.cos() + e2 * phi.sin()) * (radius * rho)
+    };
+    let mut faces = Vec::new();
+    for a in 0..n {
+        for l in 0..layers {
+            let (z0, z1) = (l as f64 / layers as f64, (l + 1) as f64 / layers as f64);
+            faces.push(vec![
+                at(1.0, a, z0),
+                at(1.0, a + 1, z0),
+                at(1.0, a + 1, z1),
+                at(1.0, a, z1),
+            ]);
+        }
+        for (z, outward, kept) in [(0.0, false, caps[0]), (1.0, true, caps[1])] {
+            if !kept {
+                continue;
+            }
+            let centre = start + axis * z;
+            let mut cap = vec![vec![
+                centre,
+                at(1.0 / rings as f64, a, z),
+                at(1.0 / rings as f64, a + 1, z),
+            ]];
+            for r in 1..rings {
+                let (r0, r1) = (r as f64 / rings as f64, (r + 1) as f64 / rings as f64);
+                cap.push(vec![
+                    at(r0, a, z),
+                    at(r1, a, z),
+                    at(r1, a + 1, z),
+                    at(r0, a + 1, z),
+                ]);
+            }
+            for mut face in cap {
+                // Counter-clockwise about +axis as built: outward on the end cap only.
+                if !outward {
+                    face.reverse();
+                }
+                faces.push(face);
+            }
+        }
+    }
+    Some(faces)
+}
+
+/// Icosphere subdivisions whose edges are about `edge` on a sphere of `radius` (the
+/// icosahedron's edge is `1.05 radius`, halved by each subdivision), at most 8.
+pub fn sphere_subdivisions(radius: f64, edge: f64) -> u32 {
+    ((1.05 * radius / edge).log2().ceil().max(0.0) as u32).min(8)
+}
+
+/// A closed sphere of `radius` as triangles counter-clockwise seen from outside: the
+/// icosphere of [`TriMesh::icosphere`](crate::region::TriMesh::icosphere) with `subdivisions`
+/// (vertices on the sphere).
+pub fn sphere_faces(centre: DVec3, radius: f64, subdivisions: u32) -> Vec<Vec<DVec3>> {
+    let mesh = crate::region::TriMesh::icosphere(centre, radius, subdivisions);
+    (0..mesh.triangles.len())
+        .map(|t| mesh.triangle(t).to_vec())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -350,5 +455,145 @@ mod tests {
         assert_eq!(lattice_polygon(&tri, 0.1), inside);
         let clockwise: Vec<DVec2> = tri.iter().rev().copied().collect();
         assert_eq!(lattice_polygon(&clockwise, 0.1), inside);
+    }
+
+    #[test]
+    fn a_circle_is_counter_clockwise_on_its_radius() {
+        let c = DVec2::new(0.3, -0.2);
+        let p = circle_points(c, 0.5, 0.01);
+        assert_eq!(p.len(), 315);
+        assert!(p.iter().all(|q| ((*q - c).length() - 0.5).abs() < 1e-12));
+        let area = signed_area(&p);
+        assert!(area > 0.0 && (area - std::f64::consts::PI * 0.25).abs() < 1e-4 * area);
+        assert_eq!(circle_points(c, 0.01, 1.0).len(), 16);
+    }
+
+    /// The welded surface of `faces`, its edges checked (`closed`: every edge used twice).
+    fn welded(faces: &[Vec<DVec3>], closed: bool) -> crate::surface::Surface {
+        let surface = crate::surface::Surface::from_polygons(faces, None, 1e-9).unwrap();
+        check_edges(&surface.faces, closed).unwrap();
+        surface
+    }
+
+    #[test]
+    fn a_circle_holds_its_area_within_the_chord_error() {
+        let c = DVec2::new(-1.0, 2.0);
+        for (r, size) in [(0.5, 0.01), (0.3, 0.05), (2.0, 0.1)] {
+            let p = circle_points(c, r, size);
+            let n = p.len();
+            assert!((1..=n).all(|k| (p[k % n] - p[k - 1]).length() <= size * (1.0 + 1e-12)));
+            // The inscribed polygon holds the circle of radius r cos(pi / n).
+            let inner = r * (std::f64::consts::PI / n as f64).cos();
+            let area = signed_area(&p);
+            let exact = std::f64::consts::PI * r * r;
+            assert!(
+                area < exact && area > exact * (inner / r).powi(2),
+                "{area} vs {exact}"
+            );
+            // Normals out of the circle (the fluid inside) as the polygon runs.
+            for e in polyline_elements(&p, true, size) {
+                assert!((e.centre - c).dot(e.normal) > 0.0);
+                assert!(((e.centre - c).length() - inner).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn a_cylinder_is_closed_outward_and_holds_its_volume() {
+        let (start, end) = (DVec3::new(0.1, 0.2, 0.3), DVec3::new(0.4, 0.2, 1.1));
+        let (r, size) = (0.25, 0.05);
+        let faces = cylinder_faces(start, end, r, size, [true, true]).unwrap();
+        let surface = welded(&faces, true);
+        surface.check_topology(true).unwrap();
+        // The inscribed polygonal cylinder: n sides of half-angle pi/n.
+        let n = 32.0;
+        let length = (end - start).length();
+        let exact = 0.5 * n * r * r * (std::f64::consts::TAU / n).sin() * length;
+        assert!(
+            (surface.volume() - exact).abs() < 1e-12 * exact,
+            "{}",
+            surface.volume()
+        );
+        // Within the chord error of pi r^2 L.
+        let analytic = std::f64::consts::PI * r * r * length;
+        let inner = (std::f64::consts::PI / n).cos().powi(2);
+        assert!(surface.volume() < analytic && surface.volume() > inner * analytic);
+        // Every face faces out: away from the axis on the side, along -+axis on the caps.
+        let k = (end - start) / length;
+        for f in 0..surface.faces.len() {
+            let p = surface.corners(f);
+            let centroid = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+            let along = (centroid - start).dot(k);
+            let normal = surface.normal(f);
+            let out = if along < 1e-9 {
+                -k
+            } else if along > length - 1e-9 {
+                k
+            } else {
+                (centroid - start - k * along).normalize()
+            };
+            assert!(normal.dot(out) > 0.99, "face {f}: {normal} vs {out}");
+            assert!(p
+                .windows(2)
+                .all(|w| (w[1] - w[0]).length() <= size * (1.0 + 1e-9)));
+        }
+        assert!(cylinder_faces(start, start, r, size, [true, true]).is_none());
+        assert!(cylinder_faces(start, end, -r, size, [true, true]).is_none());
+    }
+
+    #[test]
+    fn a_cylinder_open_at_one_end_has_one_rim_open() {
+        let (start, end) = (DVec3::ZERO, DVec3::new(0.0, 0.0, 1.0));
+        let closed = cylinder_faces(start, end, 0.5, 0.1, [true, true]).unwrap();
+        for caps in [[true, false], [false, true], [false, false]] {
+            let faces = cylinder_faces(start, end, 0.5, 0.1, caps).unwrap();
+            let open_ends = caps.iter().filter(|&&c| !c).count();
+            let surface = welded(&faces, false);
+            assert!(check_edges(&surface.faces, true).is_err());
+            // The open edges are the n chords of each missing cap's rim.
+            let n = circle_sides(0.5, 0.1);
+            let mut uses = std::collections::HashMap::new();
+            for f in &surface.faces {
+                for k in 0..f.len() {
+                    let (a, b) = (f[k], f[(k + 1) % f.len()]);
+                    *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+                }
+            }
+            assert_eq!(uses.values().filter(|&&u| u == 1).count(), open_ends * n);
+            // The cap left out (n sectors of 5 rings) is the one named.
+            assert_eq!(closed.len() - faces.len(), open_ends * n * 5);
+            let floor = faces.iter().any(|f| f.iter().all(|p| p.z.abs() < 1e-12));
+            assert_eq!(floor, caps[0]);
+        }
+    }
+
+    #[test]
+    fn a_sphere_is_closed_outward_and_holds_its_volume() {
+        let c = DVec3::new(0.3, -0.1, 0.2);
+        let r = 0.4;
+        for size in [0.2, 0.05] {
+            let n = sphere_subdivisions(r, size);
+            let faces = sphere_faces(c, r, n);
+            assert_eq!(faces.len(), 20 * 4usize.pow(n));
+            let surface = welded(&faces, true);
+            let mut nearest = f64::INFINITY;
+            for f in 0..surface.faces.len() {
+                let p = surface.corners(f);
+                let normal = surface.normal(f);
+                // Outward, and the face's plane no nearer the centre than the chord error.
+                let plane = (p[0] - c).dot(normal);
+                assert!(plane > 0.0);
+                nearest = nearest.min(plane);
+                let longest = (0..3).map(|k| (p[(k + 1) % 3] - p[k]).length());
+                assert!(longest.fold(0.0, f64::max) < 1.3 * size);
+            }
+            // The inscribed polyhedron holds the ball of radius `nearest`.
+            let ball = |rho: f64| 4.0 / 3.0 * std::f64::consts::PI * rho.powi(3);
+            let v = surface.volume();
+            assert!(v < ball(r) && v > ball(nearest), "{v} vs {}", ball(r));
+            assert!(nearest > r * (1.0 - (size / r).powi(2)));
+        }
+        assert_eq!(sphere_subdivisions(1.0, 10.0), 0);
+        assert_eq!(sphere_subdivisions(1.0, 1e-9), 8);
     }
 }

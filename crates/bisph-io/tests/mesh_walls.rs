@@ -1,5 +1,6 @@
 //! Walls from meshes against the same walls built from primitives: a closed box as an OBJ of
-//! quads, as an ASCII and a binary STL of triangles, and the named errors of bad meshes.
+//! quads, as an ASCII and a binary STL of triangles, and the named errors of bad meshes; the
+//! generated cylinder and sphere walls facing out of the fluid.
 
 use bisph_core::geometry::{box_elements_3d, triangulate, ElementShape};
 use bisph_core::walls::geometric_shepard::gamma;
@@ -274,4 +275,96 @@ fn transformed_mesh_walls_and_named_errors() {
         "bi",
     );
     assert!(parse_case("<test>", &text, &[]).is_ok());
+}
+
+/// A case of spacing `DX` with `walls` and a `shape = "walls"` block filled to `level`.
+fn round_case(walls: &str, level: f64) -> Simulation<DVec3> {
+    let text = format!(
+        r#"name = "round"
+dim = 3
+[fluid]
+density = 1000.0
+sound_speed = 20.0
+gravity = [0.0, 0.0, -9.81]
+[resolution]
+dx = {DX}
+[time]
+end = 0.01
+[[fluid_block]]
+shape = "walls"
+level = {level}
+{walls}"#
+    );
+    let loaded = parse_case("<test>", &text, &[]).unwrap();
+    build_simulation::<DVec3>(&loaded).unwrap()
+}
+
+#[test]
+fn an_open_cylinder_tank_faces_out_of_its_water() {
+    let (r, length) = (0.3, 0.6);
+    let sim = round_case(
+        &format!(
+            "[[wall]]\nshape = \"cylinder\"\nstart = [0.0, 0.0, 0.0]\nend = [0.0, 0.0, {length}]\n\
+             radius = {r}\nfluid = \"inside\"\nopen = [\"end\"]\n"
+        ),
+        0.4,
+    );
+    let e = &sim.walls.elements;
+    let mut area = 0.0;
+    for j in 0..e.len() {
+        let (c, n) = (e.centre[j], e.normal[j]);
+        assert!(c.z < length - 1e-9, "an element on the open end at {c}");
+        if c.z < 1e-9 {
+            assert!((n - DVec3::NEG_Z).length() < 1e-9, "floor normal {n}");
+        } else {
+            let radial = DVec3::new(c.x, c.y, 0.0).normalize();
+            assert!(
+                n.dot(radial) > 0.99 && n.z.abs() < 1e-9,
+                "side normal {n} at {c}"
+            );
+        }
+        area += e.area[j];
+    }
+    // The inscribed polygon of n = 38 sides: side n 2 r sin(pi/n) L, floor n r^2 sin(2 pi/n)/2.
+    let n = 38.0;
+    let pi = std::f64::consts::PI;
+    let exact = n * 2.0 * r * (pi / n).sin() * length + 0.5 * n * r * r * (2.0 * pi / n).sin();
+    assert!((area - exact).abs() < 1e-9 * exact, "{area} vs {exact}");
+    // Geometric gamma: 1 in the water beyond the kernel support (0.2) from the walls, 1/2 on
+    // the middle of the floor.
+    let k = &sim.config.kernel;
+    let g = |p: DVec3| gamma(k, p, &sim.walls.elements, &sim.walls.grid);
+    assert!((g(DVec3::new(0.0, 0.0, 0.25)) - 1.0).abs() < 1e-6);
+    assert!((g(DVec3::new(0.0, 0.0, 1e-9)) - 0.5).abs() < 1e-3);
+}
+
+#[test]
+fn a_sphere_obstacle_faces_into_itself() {
+    let (centre, r) = (DVec3::new(0.25, 0.25, 0.2), 0.1);
+    let sim = round_case(
+        "[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [0.5, 0.5, 0.5]\nopen = [\"+z\"]\n\
+         [[wall]]\nshape = \"sphere\"\ncentre = [0.25, 0.25, 0.2]\nradius = 0.1\n",
+        0.4,
+    );
+    let e = &sim.walls.elements;
+    let mut area = 0.0;
+    for j in 0..e.len() {
+        let d = e.centre[j] - centre;
+        if d.length() < 1.01 * r {
+            assert!(
+                e.normal[j].dot(d.normalize()) < -0.9,
+                "normal {}",
+                e.normal[j]
+            );
+            area += e.area[j];
+        }
+    }
+    let sphere = 4.0 * std::f64::consts::PI * r * r;
+    assert!(area < sphere && area > 0.9 * sphere, "{area} vs {sphere}");
+    // No particle inside.
+    assert!(sim
+        .fluid
+        .position
+        .iter()
+        .all(|p| (*p - centre).length() > r));
 }

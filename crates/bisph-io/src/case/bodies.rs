@@ -55,7 +55,7 @@ pub fn free_bodies<V: CaseDim>(
             (None, Some(rho), Some((volume, _, _))) => (rho * volume, rho),
             (None, Some(_), None) => return Err(loaded.error(
                 &format!("{key}.density"),
-                "a density needs closed mesh walls (shape = \"mesh\" or \"capsule\") on this body",
+                "a density needs closed mesh walls (shape = \"mesh\", \"capsule\", \"sphere\" or a closed \"cylinder\") on this body",
             )),
             (None, None, _) => {
                 return Err(loaded.error(&format!("{key}.mass"), "missing: a mass or a density"))

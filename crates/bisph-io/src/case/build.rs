@@ -194,7 +194,12 @@ fn build_walls<V: CaseDim>(
             Some(name) => 1 + case.body.iter().position(|b| &b.name == name).unwrap_or(0) as u32,
         };
         let shapes = oriented_wall_shapes::<V>(loaded, k, element_size)?;
-        if V::DIM == 3 && body > 0 && matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
+        let surface_wall = match w.shape {
+            WallShape::Mesh | WallShape::Capsule | WallShape::Sphere => true,
+            WallShape::Cylinder => w.open.is_empty(),
+            _ => false,
+        };
+        if V::DIM == 3 && body > 0 && surface_wall {
             let mut surface = crate::case::mesh_walls::wall_surface(
                 loaded,
                 &format!("wall[{k}]"),

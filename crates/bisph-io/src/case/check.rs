@@ -2,6 +2,10 @@
 //! allowed range.
 
 use crate::case::error::CaseError;
+use crate::case::primitives::{
+    check_round, check_round_wall, refuse_round_keys, refuse_round_shape_keys, round_bounds, Round,
+    RoundKeys,
+};
 use crate::case::schema::LoadedCase;
 use crate::case::schema::*;
 
@@ -436,6 +440,12 @@ fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
         if let Some(size) = w.element_size {
             positive(loaded, &format!("{key}.element_size"), size)?;
         }
+        if let Some(round) = Round::of_wall(w.shape) {
+            check_round_wall(loaded, &key, round, w, d)?;
+            check_owner(loaded, &key, w)?;
+            continue;
+        }
+        refuse_round_keys(loaded, &key, w)?;
         if d == 3 && matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
             crate::case::mesh_walls::check_wall(loaded, &key, w)?;
         } else {
@@ -443,7 +453,7 @@ fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
                 WallShape::Box => Some(Outline::Box),
                 WallShape::Polygon => Some(Outline::Polygon),
                 WallShape::Polyline => Some(Outline::Polyline),
-                WallShape::Mesh | WallShape::Capsule => None,
+                _ => None,
             };
             let points = (&w.min, &w.max, &w.points);
             shape_points(loaded, &key, w.shape.name(), outline, points, d)?;
@@ -451,7 +461,7 @@ fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
                 if w.shape != WallShape::Box || (f != "inside" && f != "outside") {
                     return Err(loaded.error(
                         &format!("{key}.fluid"),
-                        format!("expected \"inside\" or \"outside\" on a box or mesh wall, found \"{f}\" on a \"{}\"", w.shape.name()),
+                        format!("expected \"inside\" or \"outside\" on a box, mesh, circle, sphere or cylinder wall, found \"{f}\" on a \"{}\"", w.shape.name()),
                     ));
                 }
             }
@@ -469,13 +479,19 @@ fn check_walls(loaded: &LoadedCase) -> Result<(), CaseError> {
                 ));
             }
         }
-        if let Some(body) = &w.body {
-            if !c.body.iter().any(|b| &b.name == body) {
-                return Err(loaded.error(
-                    &format!("{key}.body"),
-                    format!("no [[body]] is named \"{body}\""),
-                ));
-            }
+        check_owner(loaded, &key, w)?;
+    }
+    Ok(())
+}
+
+/// Checks that the `[[body]]` owning the wall at `key`, if any, exists.
+fn check_owner(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result<(), CaseError> {
+    if let Some(body) = &w.body {
+        if !loaded.case.body.iter().any(|b| &b.name == body) {
+            return Err(loaded.error(
+                &format!("{key}.body"),
+                format!("no [[body]] is named \"{body}\""),
+            ));
         }
     }
     Ok(())
@@ -671,6 +687,11 @@ fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
             for w in &c.wall {
                 if matches!(w.shape, WallShape::Mesh | WallShape::Capsule) {
                     return Ok(()); // walls from files: no box known before building
+                }
+                if let Some(round) = Round::of_wall(w.shape) {
+                    let (a, z) = round_bounds(round, RoundKeys::of_wall(w), d);
+                    grow(&a);
+                    grow(&z);
                 }
                 for p in w.min.iter().chain(w.max.iter()) {
                     grow(p);
@@ -883,9 +904,9 @@ fn shape_points(
         }
         _ => {
             let allowed = if d == 2 {
-                "\"box\", \"polygon\" or \"polyline\""
+                "\"box\", \"polygon\", \"polyline\" or \"circle\""
             } else {
-                "\"box\", \"mesh\" or \"capsule\""
+                "\"box\", \"mesh\", \"capsule\", \"sphere\" or \"cylinder\""
             };
             Err(loaded.error(
                 &format!("{key}.shape"),
@@ -904,6 +925,7 @@ fn check_shape(
     allow_particles: bool,
 ) -> Result<(), CaseError> {
     let e = |k: &str, msg: String| Err(loaded.error(k, msg));
+    refuse_round_shape_keys(loaded, key, s)?;
     match s.shape {
         BlockShape::Box | BlockShape::Polygon | BlockShape::Polyline => {
             let outline = match s.shape {
@@ -947,22 +969,14 @@ fn check_shape(
                 }
             }
         }
-        BlockShape::Sphere if d == 3 => {
-            let Some(c) = &s.centre else {
+        BlockShape::Sphere | BlockShape::Circle | BlockShape::Cylinder => {
+            let round = Round::of_block(s.shape).expect("a round shape");
+            check_round(loaded, key, round, RoundKeys::of_shape(s), d)?;
+            if let (Some(_), false) = (s.subdivisions, round == Round::Sphere) {
                 return e(
-                    &format!("{key}.centre"),
-                    "missing: a sphere needs `centre`".into(),
+                    &format!("{key}.subdivisions"),
+                    format!("a {} takes no `subdivisions`", round.name()),
                 );
-            };
-            vector(loaded, &format!("{key}.centre"), c, 3)?;
-            match s.radius {
-                Some(r) if r > 0.0 && r.is_finite() => {}
-                other => {
-                    return e(
-                        &format!("{key}.radius"),
-                        format!("expected a positive radius, found {other:?}"),
-                    )
-                }
             }
             if let Some(n) = s.subdivisions {
                 if n > 8 {
@@ -975,9 +989,9 @@ fn check_shape(
         }
         other => {
             let allowed = if d == 2 {
-                "\"box\", \"polygon\", \"polygon_file\" or \"particles\""
+                "\"box\", \"polygon\", \"polygon_file\", \"circle\" or \"particles\""
             } else {
-                "\"box\", \"stl\", \"sphere\" or \"particles\""
+                "\"box\", \"stl\", \"sphere\", \"cylinder\" or \"particles\""
             };
             return e(
                 &format!("{key}.shape"),

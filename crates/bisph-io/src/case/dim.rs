@@ -74,8 +74,8 @@ impl CaseDim for DVec2 {
         )
     }
     fn wall_shapes(
-        _loaded: &LoadedCase,
-        _key: &str,
+        loaded: &LoadedCase,
+        key: &str,
         wall: &WallSpec,
         size: f64,
     ) -> Result<Vec<ElementShape<Self>>, CaseError> {
@@ -84,6 +84,8 @@ impl CaseDim for DVec2 {
                 geometry::box_elements_2d(vec2(&wall.min), vec2(&wall.max), &wall.open, size)
             }
             WallShape::Polygon => geometry::polyline_elements(&points2(&wall.points), true, size),
+            WallShape::Circle => crate::case::primitives::circle_elements(wall, size)
+                .map_err(|m| loaded.error(key, m))?,
             _ => geometry::polyline_elements(&points2(&wall.points), false, size),
         })
     }
@@ -119,7 +121,7 @@ impl CaseDim for DVec3 {
         size: f64,
     ) -> Result<Vec<ElementShape<Self>>, CaseError> {
         match wall.shape {
-            WallShape::Mesh | WallShape::Capsule => {
+            WallShape::Mesh | WallShape::Capsule | WallShape::Sphere | WallShape::Cylinder => {
                 crate::case::mesh_walls::wall_elements(loaded, key, wall, size)
             }
             _ => Ok(geometry::box_elements_3d(

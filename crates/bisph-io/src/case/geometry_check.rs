@@ -221,7 +221,10 @@ fn outside_or_reversed<V: Vector>(
         .iter()
         .position(|w| !w.is_empty() && winding_number(sim, w.clone(), x) < -0.5);
     if let Some(wall) = reversed {
-        let expected = if V::DIM == 2 {
+        let expected = if loaded.case.wall[wall].shape.is_round() {
+            "`fluid = \"inside\"` on a circle, sphere or cylinder that holds the fluid (they are \
+             obstacles by default)"
+        } else if V::DIM == 2 {
             "a tank's points listed counter-clockwise (an obstacle's clockwise)"
         } else {
             "a tank's triangles facing out of it (an obstacle's into it)"

@@ -236,10 +236,10 @@ mod tests {
         assert!(parse_case("c.toml", &text, &[]).is_ok());
         let text = CASE.replace(
             "[[wall]]",
-            &format!("{hole}{second}{}[[wall]]", hole.replace("box", "circle")),
+            &format!("{hole}{second}{}[[wall]]", hole.replace("box", "ellipse")),
         );
         for (text, key, value) in [
-            (text, "fluid_block[1].hole[0].shape", "circle"),
+            (text, "fluid_block[1].hole[0].shape", "ellipse"),
             (
                 CASE.replacen("\"box\"", "\"cricle\"", 1),
                 "fluid_block[0].shape",

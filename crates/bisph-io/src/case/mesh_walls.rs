@@ -1,7 +1,8 @@
 //! 3-D walls from meshes: `[[wall]] shape = "mesh"` (STL, binary or ASCII, or OBJ with
-//! triangles and quads) and `shape = "capsule"` (the parametric Apollo-like capsule), with the
-//! case's transform; checked (closed, consistent, not inverted, no degenerate face) and
-//! oriented so the element normals point out of the fluid (paper 1, 5.4).
+//! triangles and quads), `shape = "capsule"` (the parametric Apollo-like capsule) with the
+//! case's transform, and the generated `sphere` and `cylinder`; checked (closed, consistent,
+//! not inverted, no degenerate face) and oriented so the element normals point out of the
+//! fluid (paper 1, 5.4).
 
 use crate::case::schema::LoadedCase;
 
@@ -19,11 +20,11 @@ pub fn wall_transform(w: &WallSpec) -> Transform {
 }
 
 /// `true` when the fluid lies outside the wall's closed mesh (an obstacle or a body; the
-/// default for a capsule).
+/// default for a capsule, a circle, a sphere and a cylinder).
 pub fn fluid_outside(w: &WallSpec) -> bool {
     match w.fluid.as_deref() {
         Some(f) => f == "outside",
-        None => w.shape == WallShape::Capsule,
+        None => w.shape == WallShape::Capsule || w.shape.is_round(),
     }
 }
 
@@ -85,7 +86,8 @@ pub fn check_wall(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result<(), Ca
 }
 
 /// Reads (or generates) the wall's surface, transformed, checked and oriented with its
-/// normals out of the fluid. `size` is the target face size of a generated capsule.
+/// normals out of the fluid. `size` is the target face size of a generated capsule, sphere
+/// or cylinder.
 pub fn wall_surface(
     loaded: &LoadedCase,
     key: &str,
@@ -93,8 +95,22 @@ pub fn wall_surface(
     size: f64,
 ) -> Result<Surface, CaseError> {
     let bad = |m: String| loaded.error(key, m);
-    let closed = w.closed.unwrap_or(true);
+    let closed = if w.shape.is_round() {
+        w.open.is_empty()
+    } else {
+        w.closed.unwrap_or(true)
+    };
     let mut surface = match w.shape {
+        WallShape::Sphere | WallShape::Cylinder => {
+            let faces = crate::case::primitives::round_wall_faces(w, size)
+                .map_err(|m| loaded.error(key, m))?;
+            let mut extent = 0.0f64;
+            for p in faces.iter().flatten() {
+                extent = extent.max(p.abs().max_element());
+            }
+            Surface::from_polygons(&faces, None, 1e-9 * extent.max(1e-300))
+                .map_err(|e| loaded.error(key, e.to_string()))?
+        }
         WallShape::Capsule => {
             let Some(c) = &w.capsule else {
                 return Err(loaded.error(
@@ -166,6 +182,11 @@ pub fn wall_surface(
         if volume < 0.0 {
             surface.flip();
         }
+        if fluid_outside(w) {
+            surface.flip();
+        }
+    } else if w.shape.is_round() {
+        // Generated with its normals out of the solid: a cylinder open at an end.
         if fluid_outside(w) {
             surface.flip();
         }

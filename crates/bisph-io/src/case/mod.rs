@@ -11,6 +11,7 @@ pub mod fill;
 pub mod geometry_check;
 pub mod load;
 pub mod mesh_walls;
+pub mod primitives;
 pub mod regions;
 pub mod resources;
 pub mod schema;

@@ -1,10 +1,11 @@
-//! The region of a fluid block: its shape (box, polygon, polygon file, STL, sphere) with the
-//! case's transform, minus its holes; boundary elements with normals out of the region, the
+//! The region of a fluid block: its shape (box, polygon, polygon file, circle, STL, sphere,
+//! cylinder) with the case's transform, minus its holes; boundary elements with normals out of the region, the
 //! lattice of BIPI step 1, and a strict point-in-region test.
 
 use crate::case::schema::LoadedCase;
 
 use crate::case::error::CaseError;
+use crate::case::primitives::{circle_loop, cylinder_triangles};
 use crate::case::schema::{unit_factor, Angles, BlockShape, ShapeSpec};
 use crate::formats::mesh_files::{read_polygon_file, read_stl, Transform};
 use bisph_core::geometry::ElementShape;
@@ -67,8 +68,14 @@ fn err(loaded: &LoadedCase, key: &str, message: String) -> CaseError {
     loaded.error(key, message)
 }
 
-/// The loops of a 2-D shape, transformed.
-fn loops_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec) -> Result<Vec<Vec<DVec2>>, CaseError> {
+/// The loops of a 2-D shape, transformed; a circle drawn with chords of about `chord` (after
+/// the transform).
+fn loops_of(
+    loaded: &LoadedCase,
+    key: &str,
+    s: &ShapeSpec,
+    chord: f64,
+) -> Result<Vec<Vec<DVec2>>, CaseError> {
     let t = transform_of(s);
     let raw: Vec<Vec<DVec2>> = match s.shape {
         BlockShape::Box => {
@@ -87,6 +94,9 @@ fn loops_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec) -> Result<Vec<Vec<DVe
             read_polygon_file(&loaded.resolve(&file))
                 .map_err(|m| err(loaded, &format!("{key}.file"), m))?
         }
+        BlockShape::Circle => {
+            vec![circle_loop(s, chord / t.scale).map_err(|m| err(loaded, key, m))?]
+        }
         other => {
             return Err(err(
                 loaded,
@@ -101,7 +111,9 @@ fn loops_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec) -> Result<Vec<Vec<DVe
         .collect())
 }
 
-/// The region of a 2-D block: its loops and its holes' loops (even-odd rule).
+/// The region of a 2-D block: its loops and its holes' loops (even-odd rule). Circles are
+/// drawn with chords of `min(dx, element_size)`: the polygon of a circle wall of the same
+/// centre and radius at that element size.
 pub fn region_2d(
     loaded: &LoadedCase,
     key: &str,
@@ -110,13 +122,14 @@ pub fn region_2d(
     dx: f64,
     element_size: f64,
 ) -> Result<BlockRegion<DVec2>, CaseError> {
-    let outer = loops_of(loaded, key, shape)?;
+    let chord = dx.min(element_size);
+    let outer = loops_of(loaded, key, shape, chord)?;
     let outer_region = PolygonRegion::new(outer.clone())
         .map_err(|e| err(loaded, key, format!("bad polygon: {e}")))?;
     let mut loops = outer;
     for (m, h) in holes.iter().enumerate() {
         let hkey = format!("{key}.hole[{m}]");
-        let hl = loops_of(loaded, &hkey, h)?;
+        let hl = loops_of(loaded, &hkey, h, chord)?;
         for l in &hl {
             if let Some(p) = l.iter().find(|&&p| !outer_region.contains(p)) {
                 return Err(err(
@@ -141,8 +154,15 @@ pub fn region_2d(
     })
 }
 
-/// The closed mesh of a 3-D shape, transformed.
-fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<TriMesh, CaseError> {
+/// The closed mesh of a 3-D shape, transformed; a cylinder with faces of about `chord` (after
+/// the transform).
+fn mesh_of(
+    loaded: &LoadedCase,
+    key: &str,
+    s: &ShapeSpec,
+    dx: f64,
+    chord: f64,
+) -> Result<TriMesh, CaseError> {
     let t = transform_of(s);
     let soup: Vec<[DVec3; 3]> = match s.shape {
         BlockShape::Box => {
@@ -173,7 +193,7 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
             let r = s.radius.unwrap_or(1.0);
             // Default: icosphere edges of about 2 dx (edge ~ 1.05 r / 2^n).
             let n = s.subdivisions.unwrap_or_else(|| {
-                ((1.05 * r * t.scale / (2.0 * dx)).log2().ceil().max(0.0) as u32).min(7)
+                bisph_core::geometry::sphere_subdivisions(r * t.scale, 2.0 * dx).min(7)
             });
             let m = TriMesh::icosphere(c, r, n);
             (0..m.triangles.len()).map(|k| m.triangle(k)).collect()
@@ -181,6 +201,9 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
         BlockShape::Stl => {
             let file = s.file.clone().unwrap_or_default();
             read_stl(&loaded.resolve(&file)).map_err(|m| err(loaded, &format!("{key}.file"), m))?
+        }
+        BlockShape::Cylinder => {
+            cylinder_triangles(s, chord / t.scale).map_err(|m| err(loaded, key, m))?
         }
         other => {
             return Err(err(
@@ -200,7 +223,8 @@ fn mesh_of(loaded: &LoadedCase, key: &str, s: &ShapeSpec, dx: f64) -> Result<Tri
     TriMesh::from_soup(&soup, weld).map_err(|e| err(loaded, key, format!("bad mesh: {e}")))
 }
 
-/// The region of a 3-D block: inside its mesh and outside every hole's mesh.
+/// The region of a 3-D block: inside its mesh and outside every hole's mesh. Cylinders are
+/// drawn with faces of about `min(dx, element_size)`, as a cylinder wall at that element size.
 pub fn region_3d(
     loaded: &LoadedCase,
     key: &str,
@@ -209,11 +233,12 @@ pub fn region_3d(
     dx: f64,
     element_size: f64,
 ) -> Result<BlockRegion<DVec3>, CaseError> {
-    let outer = mesh_of(loaded, key, shape, dx)?;
+    let chord = dx.min(element_size);
+    let outer = mesh_of(loaded, key, shape, dx, chord)?;
     let mut hole_meshes = Vec::new();
     for (m, h) in holes.iter().enumerate() {
         let hkey = format!("{key}.hole[{m}]");
-        let mesh = mesh_of(loaded, &hkey, h, dx)?;
+        let mesh = mesh_of(loaded, &hkey, h, dx, chord)?;
         if let Some(p) = mesh.vertices.iter().find(|&&p| !outer.contains(p)) {
             return Err(err(
                 loaded,

@@ -1,6 +1,7 @@
 //! Resource limits: a case that would need more memory than the machine has is refused before
 //! anything is allocated.
 
+use crate::case::primitives::{round_bounds, round_elements, Round, RoundKeys};
 use crate::case::schema::LoadedCase;
 
 /// Bytes per fluid particle of a running simulation: the fluid arrays (id, position, velocity,
@@ -28,15 +29,26 @@ pub fn bytes_per_element(dim: usize) -> u64 {
     2 * (5 * v + 2 * corners * v + 4 * 8 + 8)
 }
 
-/// Fluid particles a case asks for, from the bounding boxes of its box and polygon blocks at
-/// their spacing (blocks read from files are bounded by their files and not counted).
+/// Fluid particles a case asks for, from the bounding boxes of its box, polygon, circle,
+/// sphere and cylinder blocks at their spacing (blocks read from files are bounded by their
+/// files and not counted).
 pub fn estimated_particles(loaded: &LoadedCase) -> f64 {
     let c = &loaded.case;
     let d = c.dim as usize;
     let mut total = 0.0;
     for b in &c.fluid_block {
         let dx = b.dx.unwrap_or(c.resolution.dx);
+        let round = Round::of_block(b.shape).filter(|r| r.dim() == d);
         let (lo, hi): (Vec<f64>, Vec<f64>) = match (&b.min, &b.max, &b.points) {
+            _ if round.is_some() => {
+                let keys = RoundKeys {
+                    centre: b.centre.as_deref(),
+                    radius: b.radius,
+                    start: b.start.as_deref(),
+                    end: b.end.as_deref(),
+                };
+                round_bounds(round.expect("a round block"), keys, d)
+            }
             (Some(lo), Some(hi), _) => (lo.clone(), hi.clone()),
             (_, _, Some(pts)) if !pts.is_empty() => {
                 let mut lo = vec![f64::INFINITY; d];
@@ -60,13 +72,19 @@ pub fn estimated_particles(loaded: &LoadedCase) -> f64 {
     total
 }
 
-/// Boundary elements a case asks for, from the surfaces of its box walls at `element_over_dx`.
+/// Boundary elements a case asks for, from the surfaces of its box, polygon and round walls
+/// at `element_over_dx`.
 pub fn estimated_elements(loaded: &LoadedCase) -> f64 {
     let c = &loaded.case;
     let d = c.dim as usize;
     let size = c.resolution.dx * c.resolution.element_over_dx;
     let mut total = 0.0;
     for w in &c.wall {
+        if let Some(round) = Round::of_wall(w.shape).filter(|r| r.dim() == d) {
+            let size = w.element_size.unwrap_or(size);
+            total += round_elements(round, RoundKeys::of_wall(w), size) + 1.0;
+            continue;
+        }
         if let (Some(lo), Some(hi)) = (&w.min, &w.max) {
             let ext: Vec<f64> = lo
                 .iter()

@@ -632,6 +632,10 @@ pub enum BlockShape {
     Stl,
     /// A generated closed sphere mesh (3-D).
     Sphere,
+    /// A circle of `radius` about `centre` (2-D), drawn as a polygon.
+    Circle,
+    /// A closed cylinder of `radius` about the axis from `start` to `end` (3-D).
+    Cylinder,
     /// Particle positions read from a CSV `file` (fluid blocks only).
     Particles,
     /// The fluid inside the case's walls below `level` (fluid blocks only).
@@ -648,6 +652,8 @@ impl BlockShape {
             BlockShape::PolygonFile => "polygon_file",
             BlockShape::Stl => "stl",
             BlockShape::Sphere => "sphere",
+            BlockShape::Circle => "circle",
+            BlockShape::Cylinder => "cylinder",
             BlockShape::Particles => "particles",
             BlockShape::Walls => "walls",
         }
@@ -680,6 +686,13 @@ pub enum WallShape {
     Mesh,
     /// A generated Apollo-like `capsule` (3-D).
     Capsule,
+    /// A circle of `radius` about `centre` (2-D), a closed polygon of elements.
+    Circle,
+    /// A sphere of `radius` about `centre` (3-D), a generated closed mesh.
+    Sphere,
+    /// A cylinder of `radius` about the axis from `start` to `end` (3-D), closed by end caps
+    /// unless `open`.
+    Cylinder,
 }
 
 impl WallShape {
@@ -691,7 +704,19 @@ impl WallShape {
             WallShape::Polygon => "polygon",
             WallShape::Mesh => "mesh",
             WallShape::Capsule => "capsule",
+            WallShape::Circle => "circle",
+            WallShape::Sphere => "sphere",
+            WallShape::Cylinder => "cylinder",
         }
+    }
+
+    /// `true` for the shapes generated from a centre or an axis and a radius (`circle`,
+    /// `sphere`, `cylinder`): obstacles unless `fluid = "inside"`.
+    pub fn is_round(self) -> bool {
+        matches!(
+            self,
+            WallShape::Circle | WallShape::Sphere | WallShape::Cylinder
+        )
     }
 }
 
@@ -711,9 +736,10 @@ pub enum ProbeKindName {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FluidBlock {
-    /// `"box"`, `"polygon"` (2-D), `"polygon_file"` (2-D), `"stl"` (3-D), `"sphere"` (3-D,
-    /// a generated closed mesh), `"particles"` (positions from a CSV file) or `"walls"` (the
-    /// fluid inside the case's walls below `level`).
+    /// `"box"`, `"polygon"` (2-D), `"polygon_file"` (2-D), `"circle"` (2-D), `"stl"` (3-D),
+    /// `"sphere"` (3-D, a generated closed mesh), `"cylinder"` (3-D), `"particles"`
+    /// (positions from a CSV file) or `"walls"` (the fluid inside the case's walls below
+    /// `level`).
     pub shape: BlockShape,
     /// `shape = "walls"`: the height along `-g` up to which the walls are filled.
     pub level: Option<f64>,
@@ -728,11 +754,15 @@ pub struct FluidBlock {
     pub points: Option<Vec<Vec<f64>>>,
     /// Geometry or particle file, relative to the case file's folder.
     pub file: Option<String>,
-    /// Sphere centre.
+    /// Circle or sphere centre.
     pub centre: Option<Vec<f64>>,
-    /// Sphere radius.
+    /// Circle, sphere or cylinder radius.
     pub radius: Option<f64>,
-    /// Sphere mesh refinement (icosahedron subdivisions; default: edges of about `dx`).
+    /// Cylinder axis start.
+    pub start: Option<Vec<f64>>,
+    /// Cylinder axis end.
+    pub end: Option<Vec<f64>>,
+    /// Sphere mesh refinement (icosahedron subdivisions; default: edges of about `2 dx`).
     pub subdivisions: Option<u32>,
     /// Length unit of the file or points: `"m"` (default), `"cm"` or `"mm"`.
     pub units: Option<String>,
@@ -815,7 +845,8 @@ pub enum Angles {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeSpec {
-    /// `"box"`, `"polygon"`, `"polygon_file"`, `"stl"` or `"sphere"`.
+    /// `"box"`, `"polygon"`, `"polygon_file"`, `"circle"` (2-D), `"stl"`, `"sphere"` or
+    /// `"cylinder"` (3-D).
     pub shape: BlockShape,
     /// Box lower corner.
     pub min: Option<Vec<f64>>,
@@ -825,10 +856,14 @@ pub struct ShapeSpec {
     pub points: Option<Vec<Vec<f64>>>,
     /// Geometry file, relative to the case file's folder.
     pub file: Option<String>,
-    /// Sphere centre.
+    /// Circle or sphere centre.
     pub centre: Option<Vec<f64>>,
-    /// Sphere radius.
+    /// Circle, sphere or cylinder radius.
     pub radius: Option<f64>,
+    /// Cylinder axis start.
+    pub start: Option<Vec<f64>>,
+    /// Cylinder axis end.
+    pub end: Option<Vec<f64>>,
     /// Sphere mesh refinement.
     pub subdivisions: Option<u32>,
     /// `"m"`, `"cm"` or `"mm"`.
@@ -852,6 +887,8 @@ impl FluidBlock {
             file: self.file.clone(),
             centre: self.centre.clone(),
             radius: self.radius,
+            start: self.start.clone(),
+            end: self.end.clone(),
             subdivisions: self.subdivisions,
             units: self.units.clone(),
             scale: self.scale,
@@ -900,8 +937,8 @@ pub struct PackSection {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
-    /// `"box"`, `"polyline"` or `"polygon"` (2-D); `"mesh"` (an STL or OBJ file) or
-    /// `"capsule"` (3-D).
+    /// `"box"`, `"polyline"`, `"polygon"` or `"circle"` (2-D); `"mesh"` (an STL or OBJ
+    /// file), `"capsule"`, `"sphere"` or `"cylinder"` (3-D).
     pub shape: WallShape,
     /// Mesh file (`.stl`, binary or ASCII, or `.obj`), relative to the case file's folder.
     pub file: Option<String>,
@@ -913,8 +950,10 @@ pub struct WallSpec {
     pub rotate: Option<Angles>,
     /// Translation of a mesh or capsule, applied last.
     pub translate: Option<Vec<f64>>,
-    /// Which side of a closed mesh the fluid is on: `"inside"` (a tank, default) or
-    /// `"outside"` (an obstacle or a floating body). Closed meshes are oriented automatically.
+    /// Which side of a box, closed mesh, circle, sphere or cylinder the fluid is on:
+    /// `"inside"` (a tank; the default of boxes and meshes) or `"outside"` (an obstacle or a
+    /// floating body; the default of capsules, circles, spheres and cylinders). Closed meshes
+    /// are oriented automatically.
     pub fluid: Option<String>,
     /// A mesh must be closed (every edge shared by two faces; default `true`). An open mesh
     /// (e.g. a tank without a lid) keeps the normals of its corner order, flipped with `flip`.
@@ -931,9 +970,21 @@ pub struct WallSpec {
     pub min: Option<Vec<f64>>,
     /// Box upper corner.
     pub max: Option<Vec<f64>>,
-    /// Box sides left open (`"-x"`, `"+x"`, `"-y"`, `"+y"`, `"-z"`, `"+z"`).
+    /// Box sides left open (`"-x"`, `"+x"`, `"-y"`, `"+y"`, `"-z"`, `"+z"`), or cylinder ends
+    /// left without a cap (`"start"`, `"end"`).
     #[serde(default)]
     pub open: Vec<String>,
+    /// Circle or sphere centre.
+    pub centre: Option<Vec<f64>>,
+    /// Circle, sphere or cylinder radius.
+    pub radius: Option<f64>,
+    /// Cylinder axis start.
+    pub start: Option<Vec<f64>>,
+    /// Cylinder axis end.
+    pub end: Option<Vec<f64>>,
+    /// Sphere mesh refinement (icosahedron subdivisions; default: edges of about twice the
+    /// element size, as a sphere block's at that spacing).
+    pub subdivisions: Option<u32>,
     /// Polyline / polygon vertices; the fluid lies on their left.
     pub points: Option<Vec<Vec<f64>>>,
     /// Owning body (default: the fixed walls).

@@ -197,8 +197,8 @@ fn open_wall_end(corners: &[[f64; 3]]) -> Option<[f64; 2]> {
         .map(|(e, _)| *e)
 }
 
-/// The walls of a case that are open by their definition: boxes with `open` sides and
-/// polylines, as `wall[k], ...`.
+/// The walls of a case that are open by their definition: boxes with `open` sides,
+/// polylines and cylinders with `open` ends, as `wall[k], ...`.
 fn open_walls(loaded: &LoadedCase) -> Vec<String> {
     loaded
         .case
@@ -210,6 +210,10 @@ fn open_walls(loaded: &LoadedCase) -> Vec<String> {
                 Some(format!("wall[{k}], a box open at {}", w.open.join(" and ")))
             }
             WallShape::Polyline => Some(format!("wall[{k}], a polyline")),
+            WallShape::Cylinder if !w.open.is_empty() => Some(format!(
+                "wall[{k}], a cylinder open at its {}",
+                w.open.join(" and ")
+            )),
             _ => None,
         })
         .collect()
