@@ -395,16 +395,6 @@ pub fn sphere_subdivisions(radius: f64, edge: f64) -> u32 {
     ((1.05 * radius / edge).log2().ceil().max(0.0) as u32).min(8)
 }
 
-/// A closed sphere of `radius` as triangles counter-clockwise seen from outside: the
-/// icosphere of [`TriMesh::icosphere`](crate::region::TriMesh::icosphere) with `subdivisions`
-/// (vertices on the sphere).
-pub fn sphere_faces(centre: DVec3, radius: f64, subdivisions: u32) -> Vec<Vec<DVec3>> {
-    let mesh = crate::region::TriMesh::icosphere(centre, radius, subdivisions);
-    (0..mesh.triangles.len())
-        .map(|t| mesh.triangle(t).to_vec())
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -565,35 +555,5 @@ mod tests {
             let floor = faces.iter().any(|f| f.iter().all(|p| p.z.abs() < 1e-12));
             assert_eq!(floor, caps[0]);
         }
-    }
-
-    #[test]
-    fn a_sphere_is_closed_outward_and_holds_its_volume() {
-        let c = DVec3::new(0.3, -0.1, 0.2);
-        let r = 0.4;
-        for size in [0.2, 0.05] {
-            let n = sphere_subdivisions(r, size);
-            let faces = sphere_faces(c, r, n);
-            assert_eq!(faces.len(), 20 * 4usize.pow(n));
-            let surface = welded(&faces, true);
-            let mut nearest = f64::INFINITY;
-            for f in 0..surface.faces.len() {
-                let p = surface.corners(f);
-                let normal = surface.normal(f);
-                // Outward, and the face's plane no nearer the centre than the chord error.
-                let plane = (p[0] - c).dot(normal);
-                assert!(plane > 0.0);
-                nearest = nearest.min(plane);
-                let longest = (0..3).map(|k| (p[(k + 1) % 3] - p[k]).length());
-                assert!(longest.fold(0.0, f64::max) < 1.3 * size);
-            }
-            // The inscribed polyhedron holds the ball of radius `nearest`.
-            let ball = |rho: f64| 4.0 / 3.0 * std::f64::consts::PI * rho.powi(3);
-            let v = surface.volume();
-            assert!(v < ball(r) && v > ball(nearest), "{v} vs {}", ball(r));
-            assert!(nearest > r * (1.0 - (size / r).powi(2)));
-        }
-        assert_eq!(sphere_subdivisions(1.0, 10.0), 0);
-        assert_eq!(sphere_subdivisions(1.0, 1e-9), 8);
     }
 }

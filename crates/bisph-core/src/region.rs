@@ -688,6 +688,16 @@ fn column_hit(x: f64, y: f64, tri: [DVec3; 3]) -> Option<f64> {
     Some(tri[0].z * w0 + tri[1].z * w1 + tri[2].z * w2)
 }
 
+/// A closed sphere of `radius` as triangles counter-clockwise seen from outside: the
+/// icosphere of [`TriMesh::icosphere`] with `subdivisions`
+/// (vertices on the sphere).
+pub fn sphere_faces(centre: DVec3, radius: f64, subdivisions: u32) -> Vec<Vec<DVec3>> {
+    let mesh = TriMesh::icosphere(centre, radius, subdivisions);
+    (0..mesh.triangles.len())
+        .map(|t| mesh.triangle(t).to_vec())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -794,5 +804,36 @@ mod tests {
             TriMesh::from_soup(&flipped, 1e-9),
             Err(RegionError::InconsistentOrientation { .. })
         ));
+    }
+
+    #[test]
+    fn a_sphere_is_closed_outward_and_holds_its_volume() {
+        let c = DVec3::new(0.3, -0.1, 0.2);
+        let r = 0.4;
+        for size in [0.2, 0.05] {
+            let n = crate::geometry::sphere_subdivisions(r, size);
+            let faces = sphere_faces(c, r, n);
+            assert_eq!(faces.len(), 20 * 4usize.pow(n));
+            let surface = crate::surface::Surface::from_polygons(&faces, None, 1e-9).unwrap();
+            check_edges(&surface.faces, true).unwrap();
+            let mut nearest = f64::INFINITY;
+            for f in 0..surface.faces.len() {
+                let p = surface.corners(f);
+                let normal = surface.normal(f);
+                // Outward, and the face's plane no nearer the centre than the chord error.
+                let plane = (p[0] - c).dot(normal);
+                assert!(plane > 0.0);
+                nearest = nearest.min(plane);
+                let longest = (0..3).map(|k| (p[(k + 1) % 3] - p[k]).length());
+                assert!(longest.fold(0.0, f64::max) < 1.3 * size);
+            }
+            // The inscribed polyhedron holds the ball of radius `nearest`.
+            let ball = |rho: f64| 4.0 / 3.0 * std::f64::consts::PI * rho.powi(3);
+            let v = surface.volume();
+            assert!(v < ball(r) && v > ball(nearest), "{v} vs {}", ball(r));
+            assert!(nearest > r * (1.0 - (size / r).powi(2)));
+        }
+        assert_eq!(crate::geometry::sphere_subdivisions(1.0, 10.0), 0);
+        assert_eq!(crate::geometry::sphere_subdivisions(1.0, 1e-9), 8);
     }
 }

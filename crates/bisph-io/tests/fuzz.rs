@@ -12,8 +12,9 @@
 
 use bisph_core::surface::Surface;
 use bisph_io::case::build_simulation;
-use bisph_io::case::mesh_walls::{checked_elements, MAX_MESH_ELEMENTS};
+use bisph_io::case::mesh_walls::checked_elements;
 use bisph_io::case::resources;
+use bisph_io::case::schema::MAX_MESH_ELEMENTS;
 use bisph_io::formats::mesh_files::{parse_obj, parse_rows, parse_stl};
 use bisph_io::parse_case;
 use bisph_io::run::checkpoint::{self, Checkpoint, SimState};

@@ -92,7 +92,7 @@ mod tests {
             ],
             kernel.support,
         );
-        let sum = |x: DVec3, rule: &dyn Fn(&[DVec3]) -> f64| {
+        let sum = |rule: &dyn Fn(&[DVec3]) -> f64| {
             shapes
                 .iter()
                 .map(|s| s.normal * rule(&s.corners))
@@ -106,11 +106,9 @@ mod tests {
             DVec3::new(1.5 * dx, 2.5 * dx, 0.5 * dx),
             DVec3::new(0.51, 3.5 * dx, 1.5 * dx),
         ] {
-            let exact = sum(x, &|c| {
-                DVec3::kernel_integral(&kernel, x, c, kernel.support)
-            });
-            let gauss = sum(x, &|c| polygon(&kernel, x, c));
-            let centre = sum(x, &|c| {
+            let exact = sum(&|c| DVec3::kernel_integral(&kernel, x, c, kernel.support));
+            let gauss = sum(&|c| polygon(&kernel, x, c));
+            let centre = sum(&|c| {
                 let centre = c.iter().fold(DVec3::ZERO, |a, &b| a + b) / c.len() as f64;
                 let area = (c[1] - c[0]).cross(c[3] - c[0]).length();
                 kernel.value((centre - x).length()) * area

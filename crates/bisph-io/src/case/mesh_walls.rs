@@ -8,7 +8,7 @@ use crate::case::schema::LoadedCase;
 
 use crate::case::error::CaseError;
 use crate::case::regions::transform_from;
-use crate::case::schema::{WallShape, WallSpec};
+use crate::case::schema::{WallShape, WallSpec, MAX_MESH_ELEMENTS};
 use crate::formats::mesh_files::{read_obj, read_stl_facets, Transform};
 use bisph_core::geometry::ElementShape;
 use bisph_core::surface::{Capsule, Surface};
@@ -17,15 +17,6 @@ use glam::DVec3;
 /// The wall's transform (units, scale, rotation, translation).
 pub fn wall_transform(w: &WallSpec) -> Transform {
     transform_from(&w.units, w.scale, &w.rotate, &w.translate)
-}
-
-/// `true` when the fluid lies outside the wall's closed mesh (an obstacle or a body; the
-/// default for a capsule, a circle, a sphere and a cylinder).
-pub fn fluid_outside(w: &WallSpec) -> bool {
-    match w.fluid.as_deref() {
-        Some(f) => f == "outside",
-        None => w.shape == WallShape::Capsule || w.shape.is_round(),
-    }
 }
 
 /// Static checks of a mesh or capsule wall, then the mesh itself (read and checked).
@@ -182,12 +173,12 @@ pub fn wall_surface(
         if volume < 0.0 {
             surface.flip();
         }
-        if fluid_outside(w) {
+        if w.fluid_outside() {
             surface.flip();
         }
     } else if w.shape.is_round() {
         // Generated with its normals out of the solid: a cylinder open at an end.
-        if fluid_outside(w) {
+        if w.fluid_outside() {
             surface.flip();
         }
     } else if w.flip {
@@ -206,10 +197,6 @@ pub fn wall_elements(
     let surface = wall_surface(loaded, key, w, size)?;
     checked_elements(&surface, size).map_err(|m| loaded.error(key, m))
 }
-
-/// Most elements one mesh wall may make (a mesh in the wrong units, or a coordinate far off,
-/// must be refused before the elements are allocated).
-pub const MAX_MESH_ELEMENTS: f64 = 2e7;
 
 /// The surface's elements of about `size`, refused (with the count) beyond
 /// [`MAX_MESH_ELEMENTS`] or the memory available.

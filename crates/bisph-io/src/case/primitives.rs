@@ -4,8 +4,9 @@
 //! [`bisph_core::geometry`].
 
 use crate::case::error::CaseError;
-use crate::case::mesh_walls::{fluid_outside, MAX_MESH_ELEMENTS};
-use crate::case::schema::{BlockShape, LoadedCase, ShapeSpec, WallShape, WallSpec};
+use crate::case::schema::{
+    BlockShape, LoadedCase, ShapeSpec, WallShape, WallSpec, MAX_MESH_ELEMENTS,
+};
 use bisph_core::geometry::{self, ElementShape};
 use glam::{DVec2, DVec3};
 use std::f64::consts::PI;
@@ -353,7 +354,7 @@ pub fn circle_elements(w: &WallSpec, size: f64) -> Result<Vec<ElementShape<DVec2
     let (centre, _, _, radius) = RoundKeys::of_wall(w).points();
     limit(round_elements(Round::Circle, RoundKeys::of_wall(w), size))?;
     let mut points = geometry::circle_points(centre.truncate(), radius, size);
-    if fluid_outside(w) {
+    if w.fluid_outside() {
         points.reverse();
     }
     Ok(geometry::polyline_elements(&points, true, size))
@@ -372,7 +373,7 @@ pub fn round_wall_faces(w: &WallSpec, size: f64) -> Result<Vec<Vec<DVec3>>, Stri
             let n = w
                 .subdivisions
                 .unwrap_or_else(|| geometry::sphere_subdivisions(radius, 2.0 * size).min(7));
-            Ok(geometry::sphere_faces(centre, radius, n))
+            Ok(bisph_core::region::sphere_faces(centre, radius, n))
         }
         Some(Round::Cylinder) => {
             limit(round_elements(Round::Cylinder, keys, size))?;

@@ -993,6 +993,21 @@ pub struct WallSpec {
     pub stretch: Option<StretchSpec>,
 }
 
+impl WallSpec {
+    /// `true` when the fluid lies outside the wall's closed mesh (an obstacle or a body; the
+    /// default for a capsule, a circle, a sphere and a cylinder).
+    pub fn fluid_outside(&self) -> bool {
+        match self.fluid.as_deref() {
+            Some(f) => f == "outside",
+            None => self.shape == WallShape::Capsule || self.shape.is_round(),
+        }
+    }
+}
+
+/// Most elements one mesh wall may make (a mesh in the wrong units, or a coordinate far off,
+/// must be refused before the elements are allocated).
+pub const MAX_MESH_ELEMENTS: f64 = 2e7;
+
 /// `capsule` of a `[[wall]]`: an Apollo-like capsule (paper 1, 5.4), axis `+z`, heat-shield
 /// apex at the origin before the wall's transform.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
