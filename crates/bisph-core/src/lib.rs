@@ -11,6 +11,7 @@
 #![deny(missing_docs)]
 
 pub mod bi;
+pub mod bodies;
 pub mod dim;
 pub mod energy;
 pub mod eos;
@@ -24,12 +25,10 @@ pub mod particles;
 pub mod probes;
 pub mod quadrature;
 pub mod region;
-pub mod robin;
 pub mod simulation;
 pub mod surface;
 pub mod terms;
 pub mod walls;
-pub mod wave;
 
 pub use dim::Vector;
 pub use energy::EnergyBudget;

@@ -23,6 +23,7 @@ pub mod rigid;
 pub mod spheric2;
 pub mod still_water;
 pub mod support;
+pub mod wave;
 
 pub use check::{CaseReport, Check, Tolerance, ValidationCase};
 pub use report::{markdown, table};

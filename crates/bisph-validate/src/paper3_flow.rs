@@ -223,17 +223,17 @@ const SNAPSHOT_TIMES: [f64; 4] = [0.1, 0.22, 0.7, 0.82];
 
 #[allow(clippy::too_many_arguments)]
 fn run_wave(
-    layout: bisph_core::wave::WaveLayout,
+    layout: crate::wave::WaveLayout,
     dx: f64,
     dt: f64,
     end: f64,
     order: usize,
-    condition: bisph_core::robin::RobinCondition,
-    series: &bisph_core::wave::RobinWaveSeries,
+    condition: bisph_core::walls::robin::RobinCondition,
+    series: &crate::wave::RobinWaveSeries,
     amplitude: f64,
 ) -> WaveRun {
     let n = (1.0 / dx).round() as usize;
-    let mut w = bisph_core::wave::Wave1d::new(
+    let mut w = crate::wave::Wave1d::new(
         0.0,
         1.0,
         n,
@@ -304,17 +304,17 @@ impl ValidationCase for RobinWave {
         "paper 3, 6.2 (figs 6-7): 1-D wave equation on fixed particles, du/dn = u at both ends; Robin fits m = 1, 2 vs the modal series, Neumann differs"
     }
     fn run(&self, quick: bool, out: &Path) -> Result<CaseReport, String> {
-        use bisph_core::robin::RobinCondition;
+        use bisph_core::walls::robin::RobinCondition;
         std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
         // The paper's resolution for both; the full run goes further in time and finer.
-        use bisph_core::wave::WaveLayout::{Staggered, Vertex};
+        use crate::wave::WaveLayout::{Staggered, Vertex};
         // The paper's resolution for both; the full run goes twice as far in time.
         let (dx, dt, end) = if quick {
             (0.01, 1e-3, 2.0)
         } else {
             (0.01, 5e-4, 4.0)
         };
-        let series = bisph_core::wave::RobinWaveSeries::new(200);
+        let series = crate::wave::RobinWaveSeries::new(200);
         // Amplitude of the analytic solution (sampled in space and time).
         let amplitude = (0..=400)
             .flat_map(|k| (0..=20).map(move |m| (k, m)))
@@ -378,7 +378,7 @@ impl ValidationCase for RobinWave {
             let ana: Vec<f64> = xs.iter().map(|&x| series.value(x, *t)).collect();
             let neu: Vec<f64> = xs
                 .iter()
-                .map(|&x| bisph_core::wave::neumann_wave_value(x, *t, 400))
+                .map(|&x| crate::wave::neumann_wave_value(x, *t, 400))
                 .collect();
             let (_, _, un) = &neumann.snapshots[k];
             plots.push(plot(

@@ -19,7 +19,7 @@
 //! Then `u^{n+1} = u^n + dt a`, `r^{n+1} = r^n + dt (u^n + u^{n+1}) / 2`,
 //! `rho^{n+1} = rho^n + dt rhodot`. Dynamic bodies (pistons and free rigid bodies) iterate
 //! with the fluid on their generalised velocities `V` and accelerations `A`
-//! ([`crate::walls::Motion::velocities`]): `V^{n+1/2} = V^n + dt/2 A` drives their elements,
+//! ([`crate::bodies::Motion::velocities`]): `V^{n+1/2} = V^n + dt/2 A` drives their elements,
 //! `A` is re-evaluated from the wall loads each pass and joins the residue
 //! (`sum_k I_k |V_k (A'_k - A_k)|`) and the relaxation; then `V^{n+1} = V^n + dt A` and the
 //! bodies drift with `V^{n+1/2}`. Staggered free bodies keep the accelerations of the previous

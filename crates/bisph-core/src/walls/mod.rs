@@ -3,22 +3,22 @@
 //! **Normal convention (whole code):** element normals point **out of the fluid**, into the
 //! wall, as in paper 1. Paper 3 uses the opposite sign; convert at its edges.
 
-pub mod bodies;
 pub mod bounce;
 pub mod energy_bi;
 pub mod gamma_cache;
 pub mod geometric_shepard;
 pub mod integrated_shepard;
+pub mod robin;
 pub mod shepard;
 pub mod shepard_bi;
 pub mod usaw;
 
+use crate::bodies::{self, Body, Kinematics, Motion, Piston};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
 use crate::particles::FluidState;
 use crate::terms::viscosity::Viscosity;
-pub use bodies::{Body, Coupling, FreeBody, Kinematics, Motion, Piston, PrescribedMotion};
 use glam::DVec3;
 
 /// Boundary elements (struct of arrays): flat wall pieces with a centre, unit normal out of the

@@ -4,7 +4,8 @@
 use crate::case::dim::CaseDim;
 use crate::case::error::CaseError;
 use crate::case::schema::LoadedCase;
-use bisph_core::walls::{Body, BoundaryElements, Coupling, FreeBody, Motion};
+use bisph_core::bodies::{Body, Coupling, FreeBody, Motion};
+use bisph_core::walls::BoundaryElements;
 use glam::DVec3;
 
 /// Sets up the free bodies of a case: mass, centre of mass and inertia (given, or from the

@@ -10,13 +10,14 @@ use crate::case::schema::{
     FluidBlock, FluxRuleName, InitialPressure, IntegratorName, LoadedCase, MassRule, ProbeKindName,
     ShepardName, ToleranceReference, UsawGammaName, WallInterpolationName, WallShape,
 };
+use bisph_core::bodies::{Body, Motion, Piston, PrescribedMotion};
 use bisph_core::energy::{energy_scale, fluid_energies};
 use bisph_core::probes::{Probe, ProbeKind};
 use bisph_core::simulation::{DiffusionChoice, UsawParams};
 use bisph_core::simulation::{Integrator, MidpointParams};
 use bisph_core::walls::shepard_bi::{BoundaryQuadrature, ShepardKind};
 use bisph_core::walls::usaw::WallInterpolation;
-use bisph_core::walls::{Body, BoundaryElements, Motion, Piston, PrescribedMotion, Stretch, Walls};
+use bisph_core::walls::{BoundaryElements, Stretch, Walls};
 use bisph_core::{Eos, Fluid, SimConfig, Simulation, Vector, WallModelChoice, Wendland};
 use std::ops::Range;
 

@@ -26,9 +26,9 @@
 //! configuration) are rebuilt from the case text stored in the checkpoint.
 
 use crate::formats::files::OutputError;
+use bisph_core::bodies::{FreeBody, Motion};
 use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
-use bisph_core::walls::{FreeBody, Motion};
 use bisph_core::{Simulation, Vector};
 use glam::{DQuat, DVec3};
 use std::path::{Path, PathBuf};

@@ -16,7 +16,7 @@
 
 use crate::case::schema::DiagnosticsSection;
 use crate::run::checkpoint::SimState;
-use bisph_core::walls::Motion;
+use bisph_core::bodies::Motion;
 use bisph_core::{SimError, Simulation, Vector};
 use rayon::prelude::*;
 use serde::Serialize;

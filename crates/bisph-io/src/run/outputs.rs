@@ -5,8 +5,8 @@
 
 use crate::formats::files::{at, OutputError};
 use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray, PvdCollection};
-use bisph_core::walls::bodies::angular_to_3d;
-use bisph_core::walls::FreeBody;
+use bisph_core::bodies::angular_to_3d;
+use bisph_core::bodies::FreeBody;
 use bisph_core::{Simulation, Vector};
 use glam::{DVec3, EulerRot};
 use std::path::{Path, PathBuf};

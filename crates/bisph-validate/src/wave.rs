@@ -1,5 +1,5 @@
 //! The scalar wave equation on fixed particles in 1-D with Robin walls at both ends (paper 3,
-//! section 6.2): the stand-alone check of the Robin wall condition ([`crate::robin`]).
+//! section 6.2): the stand-alone check of the Robin wall condition ([`bisph_core::walls::robin`]).
 //!
 //! `d2u/dt2 = Lap(u)` (eq 75) on particles at `x_a = (a + 1/2) dx` in `[x_0, x_1]`; the
 //! Laplacian is eq 18 with `f = 1`:
@@ -10,9 +10,9 @@
 //! differences, `u^{n+1} = 2 u^n - u^{n-1} + dt^2 Lap(u^n)`, started with the Taylor step
 //! `u^1 = u^0 + dt v^0 + dt^2/2 Lap(u^0)`.
 
-use crate::kernel::Wendland;
-use crate::quadrature::gauss_legendre;
-use crate::robin::{wall_value, RobinCondition, RobinSample};
+use bisph_core::kernel::Wendland;
+use bisph_core::quadrature::gauss_legendre;
+use bisph_core::walls::robin::{wall_value, RobinCondition, RobinSample};
 use glam::DVec2;
 
 /// One end of the segment.
