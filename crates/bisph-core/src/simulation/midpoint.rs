@@ -96,20 +96,7 @@ impl<V: Vector> Simulation<V> {
             }
             previous_residue = residue;
             if relaxation > 0.0 {
-                let s = &self.scratch;
-                let f = &mut self.fluid;
-                let keep = relaxation;
-                f.acceleration
-                    .par_iter_mut()
-                    .zip(s.previous_acceleration.par_iter())
-                    .for_each(|(a, &old)| *a = old * keep + *a * (1.0 - keep));
-                f.density_rate
-                    .par_iter_mut()
-                    .zip(s.previous_density_rate.par_iter())
-                    .for_each(|(d, &old)| *d = keep * old + (1.0 - keep) * *d);
-                for (a, &old) in body_acceleration.iter_mut().zip(&body_previous) {
-                    *a = keep * old + (1.0 - keep) * *a;
-                }
+                self.relax_rates(relaxation, &mut body_acceleration, &body_previous);
             }
             self.walls.set_dynamic_accelerations(&body_acceleration);
             if converged {
@@ -188,6 +175,25 @@ impl<V: Vector> Simulation<V> {
         self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
         self.refresh_pressure();
         Ok(())
+    }
+
+    /// Under-relaxes the rates of an iteration towards those of the previous one:
+    /// `a <- keep a_prev + (1 - keep) a` for the fluid's accelerations and density rates and
+    /// the bodies' generalised accelerations.
+    fn relax_rates(&mut self, keep: f64, body_acceleration: &mut [f64], body_previous: &[f64]) {
+        let s = &self.scratch;
+        let f = &mut self.fluid;
+        f.acceleration
+            .par_iter_mut()
+            .zip(s.previous_acceleration.par_iter())
+            .for_each(|(a, &old)| *a = old * keep + *a * (1.0 - keep));
+        f.density_rate
+            .par_iter_mut()
+            .zip(s.previous_density_rate.par_iter())
+            .for_each(|(d, &old)| *d = keep * old + (1.0 - keep) * *d);
+        for (a, &old) in body_acceleration.iter_mut().zip(body_previous) {
+            *a = keep * old + (1.0 - keep) * *a;
+        }
     }
 
     /// First guess of the rates at `t^{n+1/2}`: linear extrapolation from the converged
