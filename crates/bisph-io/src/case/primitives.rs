@@ -308,13 +308,29 @@ pub fn refuse_round_keys(loaded: &LoadedCase, key: &str, w: &WallSpec) -> Result
         ("end", w.end.is_some()),
         ("subdivisions", w.subdivisions.is_some()),
     ];
+    let owner = format!("a \"{}\" wall", w.shape.name());
+    refuse_given(
+        loaded,
+        key,
+        &given,
+        &owner,
+        "circle, sphere and cylinder walls",
+    )
+}
+
+/// The first key of `given` that is set, refused at `key` as one `owner` does not take (a key
+/// of `round`).
+fn refuse_given(
+    loaded: &LoadedCase,
+    key: &str,
+    given: &[(&str, bool)],
+    owner: &str,
+    round: &str,
+) -> Result<(), CaseError> {
     match given.iter().find(|(_, g)| *g) {
         Some((k, _)) => Err(loaded.error(
             &format!("{key}.{k}"),
-            format!(
-                "a \"{}\" wall takes no `{k}` (a key of circle, sphere and cylinder walls)",
-                w.shape.name()
-            ),
+            format!("{owner} takes no `{k}` (a key of {round})"),
         )),
         None => Ok(()),
     }
@@ -336,16 +352,14 @@ pub fn refuse_round_shape_keys(
         ("start", s.start.is_some()),
         ("end", s.end.is_some()),
     ];
-    match given.iter().find(|(_, g)| *g) {
-        Some((k, _)) => Err(loaded.error(
-            &format!("{key}.{k}"),
-            format!(
-                "a \"{}\" takes no `{k}` (a key of circle, sphere and cylinder shapes)",
-                s.shape.name()
-            ),
-        )),
-        None => Ok(()),
-    }
+    let owner = format!("a \"{}\"", s.shape.name());
+    refuse_given(
+        loaded,
+        key,
+        &given,
+        &owner,
+        "circle, sphere and cylinder shapes",
+    )
 }
 
 /// Boundary elements of a circle wall of chords about `size`: normals out of the circle with
