@@ -867,7 +867,7 @@ impl ValidationCase for UsawTankCorner {
             // The left-wall vertex at the height of that particle (the vertex next to the
             // free surface): its hydrostatic pressure is the particle's (the start is
             // hydrostatic, p depends on the height only).
-            let vt = &sim.walls.vertices;
+            let vt = &sim.vertices;
             let vertex = (0..vt.len())
                 .filter(|&k| vt.position[k].x.abs() < 1e-9)
                 .min_by(|&i, &j| {

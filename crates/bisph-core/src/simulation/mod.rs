@@ -186,6 +186,9 @@ pub struct Simulation<V: Vector> {
     pub fluid: Fluid<V>,
     /// Walls and bodies.
     pub walls: Walls<V>,
+    /// Vertex particles of the semi-analytical walls (paper 3, table 1; empty for the other
+    /// models).
+    pub vertices: Vertices<V>,
     /// Probes.
     pub probes: Vec<Probe<V>>,
     /// Current time.
@@ -255,6 +258,7 @@ impl<V: Vector> Simulation<V> {
             config,
             fluid,
             walls,
+            vertices: Vertices::default(),
             probes,
             time: 0.0,
             step: 0,
@@ -288,7 +292,7 @@ impl<V: Vector> Simulation<V> {
             sim.walls.prepare_gamma(cell);
         }
         if sim.config.wall_model.has_vertex_particles() {
-            sim.walls.vertices = Vertices::from_elements(
+            sim.vertices = Vertices::from_elements(
                 &sim.walls.elements,
                 sim.config.eos.rho0(),
                 cell,
@@ -427,7 +431,7 @@ impl<V: Vector> Simulation<V> {
     /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
     fn kernel_sums(&self) -> Vec<f64> {
         let kernel = self.config.kernel;
-        let (f, v, grid) = (&self.fluid, &self.walls.vertices, &self.fluid_grid);
+        let (f, v, grid) = (&self.fluid, &self.vertices, &self.fluid_grid);
         (0..f.len())
             .into_par_iter()
             .map(|i| {
@@ -469,7 +473,7 @@ impl<V: Vector> Simulation<V> {
         }
         // The last rate evaluation extrapolated the vertex densities from the initial fluid.
         let rho0 = self.config.eos.rho0();
-        let v = &mut self.walls.vertices;
+        let v = &mut self.vertices;
         for i in 0..v.len() {
             v.mass[i] *= v.density[i] / rho0;
             v.volume[i] = v.mass[i] / v.density[i];
@@ -748,7 +752,7 @@ impl<V: Vector> Simulation<V> {
         // segments' wall pressures).
         let vertex_start = Instant::now();
         if let WallModelChoice::Usaw(params) = self.config.wall_model {
-            walls.vertices.update(
+            self.vertices.update(
                 &model.kernel,
                 &eos,
                 model.gravity,
@@ -761,12 +765,11 @@ impl<V: Vector> Simulation<V> {
         let Walls {
             elements,
             grid: wall_grid,
-            vertices,
             ..
         } = walls;
         let inputs = WallModelInputs {
             gravity: model.gravity,
-            vertices,
+            vertices: &self.vertices,
             listed: self.scratch.wall_pairs_listed.then_some(ListedEnergyWalls {
                 particle_elements: &self.scratch.particle_elements,
                 element_particles: &self.scratch.element_particles,
@@ -827,7 +830,7 @@ impl<V: Vector> Simulation<V> {
         let walls = &self.walls;
         let inputs = WallModelInputs {
             gravity: model.gravity,
-            vertices: &walls.vertices,
+            vertices: &self.vertices,
             listed: None,
         };
         let residual = SkewResidual {

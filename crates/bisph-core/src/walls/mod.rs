@@ -138,8 +138,6 @@ pub struct Walls<V: Vector> {
     /// Periodic axes: element centres are kept in the primary period (their corners move with
     /// them), so an element straddling the period is seen from both sides through the grid.
     pub periodicity: Periodicity<V>,
-    /// Vertex particles of the semi-analytical walls (empty for the other models).
-    pub vertices: usaw::Vertices<V>,
 }
 
 /// Wall elements aligned with a piston's axis that stretch affinely between a fixed anchor
@@ -168,7 +166,6 @@ impl<V: Vector> Walls<V> {
             placed_at: 0.0,
             stretch: Vec::new(),
             periodicity: Periodicity::none(),
-            vertices: usaw::Vertices::default(),
         };
         walls.grid.rebuild(&walls.elements.centre);
         walls
