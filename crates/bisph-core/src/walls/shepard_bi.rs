@@ -121,20 +121,14 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         grid.for_each_sparse_neighbour(x, &elements.centre, radius, |k, _, r| {
             let ws = match self.quadrature {
                 BoundaryQuadrature::Centre => kernel.value(r) * elements.area[k],
-                BoundaryQuadrature::Exact => {
-                    let corners =
-                        elements.corner_start[k] as usize..elements.corner_start[k + 1] as usize;
-                    crate::bi::kernel_integral(
-                        kernel,
-                        x,
-                        &elements.corners[corners],
-                        kernel.support,
-                    )
-                }
+                BoundaryQuadrature::Exact => crate::bi::kernel_integral(
+                    kernel,
+                    x,
+                    elements.current_corners(k),
+                    kernel.support,
+                ),
                 BoundaryQuadrature::Gauss => {
-                    let corners =
-                        elements.corner_start[k] as usize..elements.corner_start[k + 1] as usize;
-                    crate::bi::gauss_kernel_integral(kernel, x, &elements.corners[corners])
+                    crate::bi::gauss_kernel_integral(kernel, x, elements.current_corners(k))
                 }
             };
             let n = elements.normal[k];
