@@ -655,7 +655,11 @@ pub trait WallModel<V: Vector>: Sync {
 /// distance, the point, and the angle the element subtends there (2 pi on its interior, pi on a
 /// 3-D edge or at a 2-D end point, the interior angle at a 3-D corner). `None` for elements
 /// without extent. 3-D elements are planar convex polygons.
-fn nearest_on_element<V: Vector>(corners: &[V], shift: V, x: V) -> Option<(f64, V, f64)> {
+pub(crate) fn nearest_on_element<V: Vector>(
+    corners: &[V],
+    shift: V,
+    x: V,
+) -> Option<(f64, V, f64)> {
     use std::f64::consts::PI;
     let m = corners.len();
     if m < 2 {
