@@ -113,14 +113,6 @@ fn malformed_cases_give_named_errors() {
             "wall[0].shape",
         ),
         (
-            "BIPI fill of a walls block",
-            VALID.replace(
-                "[[fluid_block]]\nshape = \"box\"\nmin = [0.0, 0.0]\nmax = [0.5, 0.5]",
-                "[[fluid_block]]\nshape = \"walls\"\nlevel = 0.5\nfill = \"bipi\"",
-            ),
-            "fluid_block[0].fill",
-        ),
-        (
             "unknown body",
             format!("{VALID}body = \"paddle\"\n"),
             "wall[0].body",

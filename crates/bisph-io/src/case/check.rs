@@ -370,7 +370,7 @@ fn check_fluid_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
 }
 
 /// Checks the `fill` of the block at `key`: `"usaw"` for a 2-D lattice block with usaw walls,
-/// `"bipi"` for a closed shape (not particles, not the water inside the walls).
+/// `"bipi"` for a shape with a region (not particles).
 fn check_fill(
     loaded: &LoadedCase,
     key: &str,
@@ -384,12 +384,6 @@ fn check_fill(
         return Err(loaded.error(
             &format!("{key}.fill"),
             "\"usaw\" relaxes a 2-D lattice block for boundary = \"usaw\"",
-        ));
-    }
-    if fill == FillName::Bipi && b.shape == BlockShape::Walls {
-        return Err(loaded.error(
-            &format!("{key}.fill"),
-            "a shape = \"walls\" block is filled on the lattice, trimmed to the walls; BIPI packs a closed shape (box, polygon, polygon_file, stl or sphere)",
         ));
     }
     if fill == FillName::Bipi && b.shape == BlockShape::Particles {
@@ -1141,12 +1135,6 @@ fn check_walls_block(loaded: &LoadedCase, k: usize) -> Result<(), CaseError> {
         return e(
             ".hole",
             "a \"walls\" block has no holes: obstacles inside the walls are cut out already",
-        );
-    }
-    if b.bipi() {
-        return e(
-            ".fill",
-            "a \"walls\" block is filled on the lattice (\"lattice\" or \"usaw\")",
         );
     }
     Ok(())

@@ -156,7 +156,11 @@ pub fn pack_block<V: CaseDim>(
     // The wall integrals are exact for elements of any size: elements as large as the
     // support keep the count (and the cost) down.
     let element_size = (dx * case.resolution.element_over_dx).max(2.0 * params.h);
-    let region = V::block_region(loaded, &key, block, dx, element_size)?;
+    let region = if block.shape == BlockShape::Walls {
+        crate::case::wall_region::region_inside_walls::<V>(loaded, k, dx, element_size)?
+    } else {
+        V::block_region(loaded, &key, block, dx, element_size)?
+    };
     let walls = PackWalls::new(&region.elements, 2.0 * params.h);
     let mut packer = Packer::new(params, region.lattice.clone(), walls)
         .map_err(|e| loaded.error(&key, e.to_string()))?;

@@ -16,6 +16,7 @@ pub mod regions;
 pub mod resources;
 pub mod schema;
 pub mod wall_fill;
+pub mod wall_region;
 
 pub use build::build_simulation;
 pub use check::check_case;

@@ -24,6 +24,22 @@ pub struct BlockRegion<V> {
 }
 
 impl<V> BlockRegion<V> {
+    /// A region from its boundary elements (normals out of it), the lattice points inside,
+    /// its area or volume, and its inside test.
+    pub fn new(
+        elements: Vec<ElementShape<V>>,
+        lattice: Vec<V>,
+        measure: f64,
+        inside: Box<dyn Fn(V) -> bool + Send + Sync>,
+    ) -> Self {
+        BlockRegion {
+            elements,
+            lattice,
+            measure,
+            inside,
+        }
+    }
+
     /// `true` when `p` lies strictly inside.
     pub fn contains(&self, p: V) -> bool {
         (self.inside)(p)

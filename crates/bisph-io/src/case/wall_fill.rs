@@ -17,11 +17,88 @@ use rayon::prelude::*;
 pub const DEFAULT_CLEARANCE_OVER_DX: f64 = 0.5;
 
 /// One wall element as a planar polygon in 3-D coordinates (2-D: a segment at z = 0).
-struct Facet {
-    corners: Vec<DVec3>,
-    normal: DVec3,
+pub(crate) struct Facet {
+    /// Corners.
+    pub corners: Vec<DVec3>,
+    /// Unit normal, out of the fluid.
+    pub normal: DVec3,
     lo: DVec3,
     hi: DVec3,
+}
+
+/// What a `shape = "walls"` block fills: the walls as facets, gravity's direction and the
+/// level and clearance of block `k` at spacing `dx` (walls split into elements of
+/// `element_size` unless a wall gives its own).
+pub(crate) struct WallWater {
+    pub facets: Vec<Facet>,
+    /// Unit vector along gravity.
+    pub down: DVec3,
+    /// Height along `-down` below which the walls are filled.
+    pub level: f64,
+    /// Least distance of a lattice point from a wall.
+    pub clearance: f64,
+}
+
+impl WallWater {
+    pub(crate) fn of<V: CaseDim>(
+        loaded: &LoadedCase,
+        k: usize,
+        dx: f64,
+        element_size: f64,
+    ) -> Result<Self, CaseError> {
+        let case = &loaded.case;
+        let block = &case.fluid_block[k];
+        let key = format!("fluid_block[{k}]");
+        let gravity = V::from_slice(&case.fluid.gravity);
+        let g = gravity.length();
+        if g == 0.0 {
+            return Err(loaded.error(
+                &format!("{key}.shape"),
+                "\"walls\" fills the walls up to a level along gravity: fluid.gravity must not be zero",
+            ));
+        }
+        let mut facets = Vec::new();
+        for w in 0..case.wall.len() {
+            let size = case.wall[w].element_size.unwrap_or(element_size);
+            facets.extend(
+                oriented_wall_shapes::<V>(loaded, w, size)?
+                    .iter()
+                    .map(facet),
+            );
+        }
+        if facets.is_empty() {
+            return Err(loaded.error(&key, "\"walls\" needs at least one [[wall]] to fill"));
+        }
+        Ok(WallWater {
+            facets,
+            down: DVec3::from_array(gravity.to_xyz()) / g,
+            level: block.level.unwrap_or(f64::INFINITY),
+            clearance: block.clearance.unwrap_or(DEFAULT_CLEARANCE_OVER_DX) * dx,
+        })
+    }
+
+    /// `true` when `x` lies in the water: below the level and above a floor.
+    pub(crate) fn holds(&self, x: DVec3) -> bool {
+        -x.dot(self.down) < self.level && above_a_floor(&self.facets, x, self.down)
+    }
+
+    /// The lattice points at spacing `dx` in the water and at least the clearance from
+    /// every wall.
+    pub(crate) fn lattice<V: CaseDim>(&self, dx: f64) -> Vec<V> {
+        let (mut lo, mut hi) = (self.facets[0].lo, self.facets[0].hi);
+        for f in &self.facets {
+            lo = lo.min(f.lo);
+            hi = hi.max(f.hi);
+        }
+        let (lo, hi) = (V::from_slice(&lo.to_array()), V::from_slice(&hi.to_array()));
+        lattice_box(lo, hi, dx)
+            .into_par_iter()
+            .filter(|&p| {
+                let x = DVec3::from_array(p.to_xyz());
+                self.holds(x) && clear(&self.facets, x, self.clearance)
+            })
+            .collect()
+    }
 }
 
 /// The lattice points of block `k` (`shape = "walls"`) at spacing `dx`.
@@ -30,47 +107,8 @@ pub fn fill_inside_walls<V: CaseDim>(
     k: usize,
     dx: f64,
 ) -> Result<Vec<V>, CaseError> {
-    let case = &loaded.case;
-    let block = &case.fluid_block[k];
-    let key = format!("fluid_block[{k}]");
-    let level = block.level.unwrap_or(f64::INFINITY);
-    let clearance = block.clearance.unwrap_or(DEFAULT_CLEARANCE_OVER_DX) * dx;
-    let gravity = V::from_slice(&case.fluid.gravity);
-    let g = gravity.length();
-    if g == 0.0 {
-        return Err(loaded.error(
-            &format!("{key}.shape"),
-            "\"walls\" fills the walls up to a level along gravity: fluid.gravity must not be zero",
-        ));
-    }
-    let down = DVec3::from_array(gravity.to_xyz()) / g;
-    let element_size = dx * case.resolution.element_over_dx;
-    let mut facets = Vec::new();
-    for w in 0..case.wall.len() {
-        let size = case.wall[w].element_size.unwrap_or(element_size);
-        facets.extend(
-            oriented_wall_shapes::<V>(loaded, w, size)?
-                .iter()
-                .map(facet),
-        );
-    }
-    if facets.is_empty() {
-        return Err(loaded.error(&key, "\"walls\" needs at least one [[wall]] to fill"));
-    }
-    let (mut lo, mut hi) = (facets[0].lo, facets[0].hi);
-    for f in &facets {
-        lo = lo.min(f.lo);
-        hi = hi.max(f.hi);
-    }
-    let (lo, hi) = (V::from_slice(&lo.to_array()), V::from_slice(&hi.to_array()));
-    let kept: Vec<V> = lattice_box(lo, hi, dx)
-        .into_par_iter()
-        .filter(|&p| {
-            let x = DVec3::from_array(p.to_xyz());
-            -x.dot(down) < level && above_a_floor(&facets, x, down) && clear(&facets, x, clearance)
-        })
-        .collect();
-    Ok(kept)
+    let element_size = dx * loaded.case.resolution.element_over_dx;
+    Ok(WallWater::of::<V>(loaded, k, dx, element_size)?.lattice(dx))
 }
 
 fn facet<V: CaseDim>(s: &ElementShape<V>) -> Facet {
