@@ -13,7 +13,8 @@ use bisph_core::{Eos, Vector, Wendland};
 use std::time::Instant;
 
 /// The initial particle positions of block `k`: read from a file (`shape = "particles"`),
-/// packed with BIPI (`fill = "bipi"`) or on the lattice.
+/// packed with BIPI (`fill = "bipi"`) or on the lattice (trimmed to the walls for
+/// `shape = "walls"`).
 pub fn block_points<V: CaseDim>(
     loaded: &LoadedCase,
     k: usize,
@@ -27,12 +28,12 @@ pub fn block_points<V: CaseDim>(
             .map_err(|m| loaded.error(&format!("{key}.file"), m))?;
         return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
     }
-    if block.shape == BlockShape::Walls {
-        return crate::case::wall_fill::fill_inside_walls::<V>(loaded, k, dx);
-    }
     if block.bipi() {
         let packed = crate::case::fill::pack_block::<V>(loaded, k, &mut |_| {})?;
         return Ok(packed.packer.positions);
+    }
+    if block.shape == BlockShape::Walls {
+        return crate::case::wall_fill::fill_inside_walls::<V>(loaded, k, dx);
     }
     let plain = matches!(block.shape, BlockShape::Box | BlockShape::Polygon)
         && block.hole.is_empty()

@@ -627,7 +627,7 @@ level = 0.5
     }
 
     /// BIPI packs the 2-D water around the pier and the obstacle: every particle stays in
-    /// the water, none is lost.
+    /// the water, none is lost, and a run starts from the packed particles.
     #[test]
     fn bipi_packs_the_water_inside_2d_walls() {
         let text = TANK_2D.replace("level = 0.5", "level = 0.5\nfill = \"bipi\"");
@@ -636,5 +636,15 @@ level = 0.5
         let x = &packed.packer.positions;
         assert_eq!(x.len(), packed.region.lattice.len());
         assert!(x.iter().all(|&p| packed.region.contains(p)));
+        // The run starts from the packed particles, not the lattice.
+        let sim: bisph_core::Simulation<DVec2> = crate::case::build_simulation(&l).unwrap();
+        assert_eq!(sim.fluid.len(), x.len());
+        let start: Vec<DVec2> = (0..x.len()).map(|i| sim.fluid.position[i]).collect();
+        let mut packed_sorted = x.clone();
+        let mut start_sorted = start;
+        for v in [&mut packed_sorted, &mut start_sorted] {
+            v.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+        }
+        assert_eq!(packed_sorted, start_sorted);
     }
 }
