@@ -1,4 +1,5 @@
-//! `bisph bench`: throughput suite of the explicit scheme on the built-in dam breaks.
+//! `bisph bench`: throughput suites: the explicit scheme on the built-in dam breaks, and the seed
+//! papers' wall-bounded and implicit runs.
 //!
 //! Each configuration (dimension, particle count, `h/dx`, threads) runs in a child process of
 //! its own, so that its peak memory is its own: the dam break is refined to about the asked
@@ -19,6 +20,13 @@
 //! Suite `shepard` (paper 2, table 1): the cost of the Shepard factor on the paper-2 still-water
 //! tank (`bi` walls) with discrete and geometric gamma, against the energy-conserving walls
 //! (no renormalisation, gamma = 1), at 10k and 50k particles.
+//!
+//! Suite `walls`: the seed papers' wall-bounded and implicit runs with their own settings:
+//! SPHERIC test 2 (3-D, `bi` walls with geometric gamma, delta-SPH, Verlet) at 50k and 100k
+//! particles, and the Lobovsky dam break (2-D, energy walls, the semi-implicit midpoint
+//! scheme, which evaluates the rates several times per step) at 50k and 200k. Each is refined
+//! to the particle count from its shipped case file, early in the flow (the first steps
+//! after release).
 
 use bisph_core::Simulation;
 use bisph_io::case::{build_simulation, CaseDim};
@@ -31,12 +39,18 @@ use std::time::Instant;
 
 /// The built-in 3-D dam break (the 2-D one is `bisph_io::case::DEFAULT_CASE`).
 const DAM_BREAK_3D: &str = include_str!("../../../cases/dam-break-3d.toml");
+/// The seed papers' wall-bounded cases of the `walls` suite.
+const SPHERIC_TEST2: &str = include_str!("../../../cases/spheric-test2.toml");
+const LOBOVSKY: &str = include_str!("../../../cases/lobovsky-dam-break.toml");
 
 /// Water volumes of the two dam breaks: 0.6 x 0.3 m and 0.6 x 0.3 x 0.3 m.
 const WATER_AREA_2D: f64 = 0.18;
 const WATER_VOLUME_3D: f64 = 0.054;
 /// Water area of paper 2's still-water tank, 0.9 x 0.092 m.
 const TANK_AREA: f64 = 0.0828;
+/// Water of SPHERIC test 2 (1.228 x 1 x 0.55 m) and of the Lobovsky dam break (0.6 x 0.3 m).
+const SPHERIC_WATER: f64 = 1.228 * 0.55;
+const LOBOVSKY_WATER: f64 = 0.18;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Suite {
@@ -48,6 +62,9 @@ pub enum Suite {
     Full,
     /// Shepard factor cost on the still-water tank: discrete, geometric, none; 10k and 50k.
     Shepard,
+    /// SPHERIC test 2 (3-D, bi + geometric) at 50k and 100k; Lobovsky (2-D, midpoint) at 50k
+    /// and 200k.
+    Walls,
 }
 
 /// The benchmarked case.
@@ -61,15 +78,30 @@ enum BenchCase {
     TankGeometric,
     /// The same tank with the energy-conserving walls (gamma = 1).
     TankEnergy,
+    /// SPHERIC test 2 as shipped (3-D).
+    SphericTest2,
+    /// The Lobovsky dam break as shipped (2-D, midpoint).
+    Lobovsky,
 }
 
 impl BenchCase {
-    const ALL: [(BenchCase, &'static str); 4] = [
+    const ALL: [(BenchCase, &'static str); 6] = [
         (BenchCase::DamBreak, "dam-break"),
         (BenchCase::TankDiscrete, "tank-discrete"),
         (BenchCase::TankGeometric, "tank-geometric"),
         (BenchCase::TankEnergy, "tank-energy"),
+        (BenchCase::SphericTest2, "spheric-test2"),
+        (BenchCase::Lobovsky, "lobovsky"),
     ];
+
+    /// The dimension of a case that has one of its own.
+    fn own_dim(self) -> Option<u8> {
+        match self {
+            BenchCase::SphericTest2 => Some(3),
+            BenchCase::Lobovsky => Some(2),
+            _ => None,
+        }
+    }
 
     fn name(self) -> &'static str {
         Self::ALL
@@ -213,17 +245,24 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                     .map(|c| (c, 2, n))
                 })
                 .collect(),
+            Suite::Walls => vec![
+                (BenchCase::SphericTest2, 3, 50_000),
+                (BenchCase::SphericTest2, 3, 100_000),
+                (BenchCase::Lobovsky, 2, 50_000),
+                (BenchCase::Lobovsky, 2, 200_000),
+            ],
         }
     };
-    // Paper 2's tank is run at its own h/dx = 2.
-    let h_list = if matches!(args.suite, Suite::Shepard) && args.particles.is_empty() {
+    // Paper 2's tank and the walls suite's cases run at their own h/dx = 2.
+    let own_h = matches!(args.suite, Suite::Shepard | Suite::Walls);
+    let h_list = if own_h && args.particles.is_empty() {
         vec![2.0]
     } else {
         args.h_over_dx.clone()
     };
     let exe = std::env::current_exe().map_err(|e| (1, format!("cannot find bisph itself: {e}")))?;
     println!(
-        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7}",
+        "{:>14} {:>3} {:>6} {:>7} {:>9} {:>6} {:>12} {:>12} {:>12} {:>7} {:>5} {:>6} {:>6} {:>6} {:>6} {:>7} {:>5}",
         "case",
         "dim",
         "h/dx",
@@ -239,7 +278,8 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
         "force%",
         "wall%",
         "integ%",
-        "B/part"
+        "B/part",
+        "evals"
     );
     let mut configs = Vec::new();
     for &(case, dim, particles) in &sizes {
@@ -395,7 +435,7 @@ fn print_row(row: &Value) {
     let f = |key: &str| row[key].as_f64().unwrap_or(f64::NAN);
     let share = |key: &str| 100.0 * f(key) / f("seconds_steps").max(1e-12);
     println!(
-        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0}",
+        "{:>14} {:>3} {:>6.3} {:>7} {:>9} {:>6.1} {:>12.3e} {:>12.3e} {:>12.3e} {:>7.2} {:>5.1} {:>6.1} {:>6.1} {:>6.1} {:>6.1} {:>7.0} {:>5.2}",
         row["case"].as_str().unwrap_or("?"),
         f("dim"),
         f("h_over_dx"),
@@ -412,6 +452,7 @@ fn print_row(row: &Value) {
         share("seconds_wall_pressure"),
         share("seconds_integration"),
         f("peak_bytes_per_particle"),
+        f("evaluations_per_step"),
     );
 }
 
@@ -426,20 +467,31 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
     let (text, dx) = match (config.case, config.dim) {
         (BenchCase::DamBreak, 2) => (bisph_io::case::DEFAULT_CASE, (WATER_AREA_2D / n).sqrt()),
         (BenchCase::DamBreak, _) => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
+        (BenchCase::SphericTest2, _) => (SPHERIC_TEST2, (SPHERIC_WATER / n).cbrt()),
+        (BenchCase::Lobovsky, _) => (LOBOVSKY, (LOBOVSKY_WATER / n).sqrt()),
         _ => (bisph_validate::paper2::TANK, (TANK_AREA / n).sqrt()),
     };
+    if config.case.own_dim().is_some_and(|d| d != config.dim) {
+        return Err((
+            2,
+            format!("{} runs in {}-D only", config.case.name(), config.dim),
+        ));
+    }
     let mut overrides = vec![
         format!("resolution.dx={dx}"),
         format!("resolution.h_over_dx={}", config.h_over_dx),
-        "time.integrator=\"verlet\"".into(),
         "output.plots=false".into(),
         format!("time.neighbour_skin={}", config.skin),
     ];
+    if config.case != BenchCase::Lobovsky {
+        overrides.push("time.integrator=\"verlet\"".into());
+    }
     match config.case {
         BenchCase::DamBreak => {}
         BenchCase::TankDiscrete => overrides.push("shepard=\"discrete\"".into()),
         BenchCase::TankGeometric => overrides.push("shepard=\"geometric\"".into()),
         BenchCase::TankEnergy => overrides.push("boundary=\"energy\"".into()),
+        BenchCase::SphericTest2 | BenchCase::Lobovsky => {}
     }
     let loaded = parse_case("<bench>", text, &overrides).map_err(|e| (1, e.to_string()))?;
     pool.install(|| match config.dim {
@@ -460,10 +512,12 @@ fn measure<V: CaseDim>(
     let pairs_per_step = sim.count_pairs() as f64;
     sim.timings = Default::default();
     let mut step_seconds = Vec::with_capacity(config.steps as usize);
+    let mut evaluations = 0u64;
     for _ in 0..config.steps {
         let start = Instant::now();
         sim.advance(None).map_err(|e| (3, e.to_string()))?;
         step_seconds.push(start.elapsed().as_secs_f64());
+        evaluations += u64::from(sim.last_iterations);
     }
     let seconds: f64 = step_seconds.iter().sum();
     let median = median_of(&mut step_seconds);
@@ -492,6 +546,7 @@ fn measure<V: CaseDim>(
         "seconds_forces": t.rates - t.wall_pressure, "seconds_wall_pressure": t.wall_pressure,
         "seconds_integration": t.steps - t.neighbours - t.rates, "seconds_steps": t.steps,
         "peak_bytes_per_particle": (peak * 1024) as f64 / n,
+        "evaluations_per_step": evaluations as f64 / steps,
     }))
 }
 

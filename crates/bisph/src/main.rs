@@ -24,7 +24,7 @@ struct Cli {
 enum Command {
     /// Run a case (the built-in 2-D dam break when no case is given).
     Run(RunArgs),
-    /// Run the standard throughput benchmark.
+    /// Run a throughput benchmark suite (standard by default).
     Bench(bench::BenchArgs),
     /// Run validation cases and compare them with their references.
     Validate(ValidateArgs),
