@@ -471,11 +471,8 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         (BenchCase::Lobovsky, _) => (LOBOVSKY, (LOBOVSKY_WATER / n).sqrt()),
         _ => (bisph_validate::paper2::TANK, (TANK_AREA / n).sqrt()),
     };
-    if config.case.own_dim().is_some_and(|d| d != config.dim) {
-        return Err((
-            2,
-            format!("{} runs in {}-D only", config.case.name(), config.dim),
-        ));
+    if let Some(d) = config.case.own_dim().filter(|&d| d != config.dim) {
+        return Err((2, format!("{} runs in {d}-D only", config.case.name())));
     }
     let mut overrides = vec![
         format!("resolution.dx={dx}"),
