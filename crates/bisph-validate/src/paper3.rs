@@ -210,6 +210,7 @@ density = 1.0
 sound_speed = 10.0
 eos = "tait"
 artificial_viscosity = 0.0
+delta = 0.0                     # no density diffusion but where a run asks for it (paper 3, 3.2)
 [resolution]
 dx = 0.04
 h_over_dx = 2.0

@@ -155,8 +155,8 @@ pub struct FluidSection {
     /// Gravity vector [m/s^2] (`dim` components).
     #[serde(default)]
     pub gravity: Vec<f64>,
-    /// delta-SPH coefficient (0 = off; default [`DEFAULT_BI_DELTA`] with `boundary = "bi"`,
-    /// whose operators are not skew-adjoint and gain energy without diffusion, else 0).
+    /// delta-SPH coefficient (0 = off; default [`DEFAULT_DELTA`] with `boundary = "bi"` and
+    /// `"usaw"`, whose operators are not skew-adjoint, else 0).
     pub delta: Option<f64>,
     /// Hydrostatic correction of the density diffusion (delta-SPH, or paper 3 eq 81).
     #[serde(default = "yes")]
@@ -181,8 +181,12 @@ pub struct FluidSection {
     pub ferrari_coefficient: f64,
 }
 
-/// The delta-SPH coefficient `boundary = "bi"` gets when `fluid.delta` is left out.
-pub const DEFAULT_BI_DELTA: f64 = 0.1;
+/// The delta-SPH coefficient `boundary = "bi"` and `boundary = "usaw"` get when `fluid.delta`
+/// is left out. Neither model's operators are skew-adjoint: without density diffusion the
+/// classic BI gains energy from still water, and with usaw walls a free-surface particle in an
+/// acute corner against a wall goes into tension and is drawn to the wall (`bisph validate
+/// still-water`, the sloped tank).
+pub const DEFAULT_DELTA: f64 = 0.1;
 
 /// The artificial viscosity every wall model gets when `fluid.artificial_viscosity` is left
 /// out. The `bi` and `usaw` operators are not skew-adjoint and gain energy without
@@ -196,8 +200,8 @@ impl Case {
     /// The delta-SPH coefficient in force: `fluid.delta`, or the wall model's default.
     pub fn delta(&self) -> f64 {
         self.fluid.delta.unwrap_or(match self.boundary {
-            BoundaryName::Bi => DEFAULT_BI_DELTA,
-            BoundaryName::Energy | BoundaryName::Usaw => 0.0,
+            BoundaryName::Bi | BoundaryName::Usaw => DEFAULT_DELTA,
+            BoundaryName::Energy => 0.0,
         })
     }
 
