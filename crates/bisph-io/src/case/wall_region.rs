@@ -8,7 +8,7 @@ use crate::case::error::CaseError;
 use crate::case::regions::BlockRegion;
 use crate::case::schema::LoadedCase;
 use crate::case::wall_fill::WallWater;
-use bisph_core::geometry::ElementShape;
+use bisph_core::geometry::{signed_area, winding_number, ElementShape};
 use glam::{DVec2, DVec3};
 use std::collections::HashMap;
 
@@ -44,13 +44,16 @@ pub fn region_inside_walls<V: CaseDim>(
         };
         let piece: Vec<DVec3> = clipped.iter().map(|c| c.0).collect();
         let (centre, area) = centroid(&piece);
+        if area <= 0.0 {
+            continue;
+        }
         // A piece bounds the water where any part of it faces water (its centre, or a corner
         // drawn slightly in): a floor element partly under an obstacle standing on it stays
         // whole, so the boundary has no gap beside the obstacle.
         let faces_water = std::iter::once(centre)
             .chain(piece.iter().map(|&c| c + (centre - c) * 0.01))
             .any(|q| water.holds(q - f.normal * probe));
-        if area <= 0.0 || !faces_water {
+        if !faces_water {
             continue;
         }
         if let Some((a, b)) = slice(&clipped) {
@@ -335,13 +338,6 @@ fn chain(edges: &[(DVec3, DVec3)]) -> Result<Vec<Vec<DVec3>>, String> {
     Ok(loops)
 }
 
-/// Twice the signed area of a polygon (positive counter-clockwise).
-fn area2(p: &[DVec2]) -> f64 {
-    (0..p.len())
-        .map(|i| p[i].perp_dot(p[(i + 1) % p.len()]))
-        .sum()
-}
-
 /// Drops the corners where the outline runs straight on (many wall elements meet the level
 /// along one flat wall).
 fn simplify(p: &[DVec2]) -> Vec<DVec2> {
@@ -364,32 +360,20 @@ fn simplify(p: &[DVec2]) -> Vec<DVec2> {
     out
 }
 
-/// `true` when `q` lies inside the polygon (even-odd rule).
-fn inside(q: DVec2, p: &[DVec2]) -> bool {
-    let mut c = false;
-    for i in 0..p.len() {
-        let (a, b) = (p[i], p[(i + 1) % p.len()]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (b.x - a.x) * (q.y - a.y) / (b.y - a.y) {
-            c = !c;
-        }
-    }
-    c
-}
-
 /// Outer loops (counter-clockwise), each with the holes (clockwise) it holds directly.
 type Nested<'a> = Vec<(&'a [DVec2], Vec<&'a [DVec2]>)>;
 
 fn nest(loops: &[Vec<DVec2>]) -> Result<Nested<'_>, String> {
     let mut out: Nested<'_> = loops
         .iter()
-        .filter(|l| area2(l) > 0.0)
+        .filter(|l| signed_area(l) > 0.0)
         .map(|l| (l.as_slice(), Vec::new()))
         .collect();
-    for h in loops.iter().filter(|l| area2(l) < 0.0) {
+    for h in loops.iter().filter(|l| signed_area(l) < 0.0) {
         let owner = out
             .iter_mut()
-            .filter(|(o, _)| inside(h[0], o))
-            .min_by(|a, b| area2(a.0).total_cmp(&area2(b.0)));
+            .filter(|(o, _)| winding_number(h[0], o) != 0)
+            .min_by(|a, b| signed_area(a.0).total_cmp(&signed_area(b.0)));
         match owner {
             Some((_, holes)) => holes.push(h.as_slice()),
             None => {
@@ -473,7 +457,7 @@ fn ear_clip(polygon: &[DVec2]) -> Result<Vec<[DVec2; 3]>, String> {
         out.push([p[(i + n - 1) % n], p[i], p[(i + 1) % n]]);
         p.remove(i);
     }
-    if p.len() == 3 && area2(&p) > 0.0 {
+    if p.len() == 3 && signed_area(&p) > 0.0 {
         out.push([p[0], p[1], p[2]]);
     }
     Ok(out)

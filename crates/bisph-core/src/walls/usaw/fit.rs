@@ -401,6 +401,20 @@ mod tests {
         }
     }
 
+    /// [`balance_positions`] for water (Tait, `rho0 = 1000`, sound speed `c0`) under
+    /// `g = 9.81`.
+    fn balance_in_water(fit: &FitSetting<'_, DVec2>, x: &mut [DVec2], c0: f64) -> Relaxation {
+        let eos = Eos::Tait {
+            rho0: 1000.0,
+            c0,
+            p0: 0.0,
+            xi: 7.0,
+        };
+        let pressure = |d: f64| eos.hydrostatic_pressure(9.81, d);
+        let density = |p: f64| eos.density(p).unwrap();
+        balance_positions(fit, x, 9.81, &pressure, &density)
+    }
+
     /// The zero-order residual (vertex particles included) falls by three orders of magnitude
     /// from the lattice's, where the fluid sum overshoots the exact `grad gamma` near walls.
     #[test]
@@ -422,15 +436,7 @@ mod tests {
         let (kernel, e, v, mut x) = still_tank();
         let fit = tank_fit(&kernel, &v, &e);
         relax_positions(&fit, &mut x);
-        let eos = Eos::Tait {
-            rho0: 1000.0,
-            c0: 20.0,
-            p0: 0.0,
-            xi: 7.0,
-        };
-        let pressure = |d: f64| eos.hydrostatic_pressure(9.81, d);
-        let density = |p: f64| eos.density(p).unwrap();
-        let r = balance_positions(&fit, &mut x, 9.81, &pressure, &density);
+        let r = balance_in_water(&fit, &mut x, 20.0);
         assert!(r.residual[0] > 1.0, "{r:?}");
         assert!(r.residual[1] < 0.05 * r.residual[0], "{r:?}");
     }
@@ -474,15 +480,7 @@ mod tests {
             max_iterations: 5000,
         };
         relax_positions(&fit, &mut x);
-        let eos = Eos::Tait {
-            rho0: 1000.0,
-            c0: 22.15,
-            p0: 0.0,
-            xi: 7.0,
-        };
-        let pressure = |d: f64| eos.hydrostatic_pressure(9.81, d);
-        let density = |p: f64| eos.density(p).unwrap();
-        balance_positions(&fit, &mut x, 9.81, &pressure, &density);
+        balance_in_water(&fit, &mut x, 22.15);
         let mut grid = CellGrid::new(kernel.support + e.max_reach);
         grid.rebuild(&e.centre);
         let distance = |p: DVec2| wall_distance(&e, &grid, p, kernel.support);
