@@ -12,6 +12,7 @@
 
 pub mod bi;
 pub mod bodies;
+pub mod decomposition;
 pub mod dim;
 pub mod energy;
 pub mod eos;

@@ -1,0 +1,29 @@
+//! Domain decomposition: the deterministic pieces a distributed run is built from.
+//!
+//! Every function here is pure and gives the same result from the same data whatever the
+//! order the data comes in, so every process of a distributed run that evaluates it on the
+//! same input reaches the same answer without talking to the others.
+//!
+//! - [`bisect`]: recursive coordinate bisection of weighted points into any number of parts,
+//!   each with an axis-aligned region ([`Bounds`]); [`Decomposition::owner`] names the part
+//!   whose region holds a point;
+//! - [`part_loads`], [`imbalance`] and [`RebalancePolicy`]: when the work has drifted far
+//!   enough from the cuts to decompose again;
+//! - [`ExactSum`]: an exact, order-independent sum of `f64` values, so a global reduction
+//!   gives the same bits however its terms are spread over parts.
+
+mod balance;
+mod bisection;
+mod bounds;
+mod exact_sum;
+#[cfg(test)]
+mod test_support;
+
+pub use balance::{imbalance, part_loads, RebalancePolicy};
+pub use bisection::{bisect, Cut, Decomposition};
+pub use bounds::Bounds;
+pub use exact_sum::{exact_sum, ExactSum};
+
+/// Global particle identity, as stored in [`crate::Fluid::id`]: unique over the whole run,
+/// independent of which part holds the particle and where in its arrays.
+pub type GlobalId = u32;
