@@ -7,6 +7,11 @@
 //! - [`bisect`]: recursive coordinate bisection of weighted points into any number of parts,
 //!   each with an axis-aligned region ([`Bounds`]); [`Decomposition::owner`] names the part
 //!   whose region holds a point;
+//! - [`plan_migration`] and [`MigrationPlan::apply`]: which points leave which part for
+//!   which other part when the regions change or the points move;
+//! - [`select_halos`] and [`Decomposition::parts_within`]: the copies of other parts' points
+//!   (with the periodic shift that brings each image next to the region) a part needs to
+//!   evaluate its own points' neighbour sums;
 //! - [`part_loads`], [`imbalance`] and [`RebalancePolicy`]: when the work has drifted far
 //!   enough from the cuts to decompose again;
 //! - [`ExactSum`]: an exact, order-independent sum of `f64` values, so a global reduction
@@ -16,6 +21,8 @@ mod balance;
 mod bisection;
 mod bounds;
 mod exact_sum;
+mod halo;
+mod migration;
 #[cfg(test)]
 mod test_support;
 
@@ -23,6 +30,8 @@ pub use balance::{imbalance, part_loads, RebalancePolicy};
 pub use bisection::{bisect, Cut, Decomposition};
 pub use bounds::Bounds;
 pub use exact_sum::{exact_sum, ExactSum};
+pub use halo::{select_halos, HaloEntry};
+pub use migration::{plan_migration, Departures, MigrationPlan};
 
 /// Global particle identity, as stored in [`crate::Fluid::id`]: unique over the whole run,
 /// independent of which part holds the particle and where in its arrays.
