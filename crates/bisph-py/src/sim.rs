@@ -12,8 +12,8 @@ use bisph_io::case::CaseDim;
 use bisph_io::run::diagnostics::from_sim_error;
 use bisph_io::run::settle::{settle_reporting, SettlingSummary};
 use bisph_io::{parse_case, LoadedCase, RunError, RunOptions};
-use numpy::ndarray::{ArrayView1, ArrayView2};
-use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use numpy::ndarray::{Array2, ArrayView1, ArrayView2};
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use rayon::{ThreadPool, ThreadPoolBuilder};
@@ -114,14 +114,13 @@ impl Simulation {
     /// A copy of a particle quantity: shape `(n,)` or `(n, dim)`.
     fn particles<'py>(&self, py: Python<'py>, field: ParticleField) -> Bound<'py, PyAny> {
         let (values, cols) = self.solver.particle_field(field);
-        let array = PyArray1::from_vec(py, values);
         if cols == 1 {
-            return array.into_any();
+            return PyArray1::from_vec(py, values).into_any();
         }
-        let rows = self.solver.particle_count();
-        match array.reshape([rows, cols]) {
-            Ok(a) => a.into_any(),
-            Err(_) => unreachable!("{rows} x {cols} values reshape to ({rows}, {cols})"),
+        let rows = values.len() / cols;
+        match Array2::from_shape_vec((rows, cols), values) {
+            Ok(a) => a.into_pyarray(py).into_any(),
+            Err(_) => unreachable!("{rows} rows of {cols} values make a ({rows}, {cols}) array"),
         }
     }
 
