@@ -126,7 +126,7 @@ impl Simulation {
 
     /// A read-only view of an element quantity: shape `(m,)` or `(m, dim)`.
     fn elements<'py>(slf: &Bound<'py, Self>, field: ElementField) -> PyResult<Bound<'py, PyAny>> {
-        let this = slf.borrow();
+        let this = slf.try_borrow()?;
         let (values, cols) = this.solver.element_field(field);
         let owner = slf.clone().into_any();
         // SAFETY: the element buffers are allocated when the case is built and only written
@@ -304,7 +304,7 @@ impl Simulation {
     /// read-only view.
     #[getter]
     fn element_bodies<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
-        let this = slf.borrow();
+        let this = slf.try_borrow()?;
         let view = ArrayView1::from(this.solver.element_bodies());
         // SAFETY: as for the other element views.
         let array = unsafe { PyArray1::borrow_from_array(&view, slf.clone().into_any()) };

@@ -3,11 +3,25 @@
 from __future__ import annotations
 
 import _thread
+import signal
 
 import pytest
 
 import bisph
 from conftest import small_case
+
+
+#: Steps after which a run that was not interrupted fails the test instead of running on.
+TOO_MANY = 5000
+
+
+@pytest.fixture(autouse=True)
+def sigint_raises():
+    """Python's own SIGINT handler, which raises KeyboardInterrupt (a process started in the
+    background may inherit SIGINT ignored, and then ``interrupt_main`` does nothing)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
 
 
 def interrupt_at(step: int):
@@ -16,6 +30,8 @@ def interrupt_at(step: int):
     def progress(p: bisph.Progress) -> None:
         if p.step == step:
             _thread.interrupt_main()
+        if p.step > TOO_MANY:
+            raise AssertionError("the interrupt did not stop the run")
 
     return progress
 
@@ -25,7 +41,7 @@ def test_keyboard_interrupt_stops_a_long_run_and_the_simulation_goes_on():
     with pytest.raises(KeyboardInterrupt):
         sim.run(until=1e6, progress=interrupt_at(20))
     stopped_at = sim.steps
-    assert 20 <= stopped_at < 100_000
+    assert 20 <= stopped_at < TOO_MANY
     assert 0 < sim.time < 1e6
     sim.step()
     assert sim.steps == stopped_at + 1

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -95,3 +97,31 @@ def test_a_failing_progress_callable_stops_the_run_with_its_exception():
     assert sim.steps == 5
     with pytest.raises(TypeError, match="progress"):
         sim.run(progress=42)
+
+
+def test_a_simulation_running_in_a_thread_refuses_other_callers():
+    sim = small_case().build()
+    started, stop = threading.Event(), threading.Event()
+    raised = []
+
+    def progress(p: bisph.Progress) -> None:
+        started.set()
+        if stop.is_set():
+            raise RuntimeError("stopped by the test")
+
+    def run() -> None:
+        try:
+            sim.run(until=1e6, progress=progress)
+        except RuntimeError as e:
+            raised.append(str(e))
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    assert started.wait(30)
+    for call in (lambda: sim.time, lambda: sim.element_pressures, sim.step):
+        with pytest.raises(RuntimeError, match="lready"):
+            call()
+    stop.set()
+    worker.join(30)
+    assert raised == ["stopped by the test"]
+    sim.step()  # usable again

@@ -38,6 +38,7 @@ def test_pack_returns_the_packed_particles():
 
 
 def test_read_run_reads_a_command_line_run(tmp_path):
+    pytest.importorskip("pandas")
     run_cli(DAM_BREAK, tmp_path)
     run = bisph.read_run(tmp_path)
     assert list(run.energy.columns)[:6] == [
