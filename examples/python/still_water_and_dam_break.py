@@ -49,7 +49,8 @@ def run_case(file: str, fine: bool, out: Path) -> bisph.Run:
 
 def plot(run: bisph.Run, probe: str, png: Path) -> None:
     """The energy budget (changes from the start) and one pressure probe against time."""
-    e = run.energy
+    e, probes = run.energy, run.probes
+    assert probes is not None, "the case has probes"
     t = e["t"]
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
     names = ["kinetic", "compressible", "potential", "wall_work", "viscous_dissipation", "total"]
@@ -57,7 +58,7 @@ def plot(run: bisph.Run, probe: str, png: Path) -> None:
         left.plot(t, e[name] - e[name][0], label=name)
     left.set(xlabel="t [s]", ylabel="energy change [J/m]", title="Energy budget")
     left.legend()
-    right.plot(run.probes["t"], run.probes[probe] / 1000.0)
+    right.plot(probes["t"], probes[probe] / 1000.0)
     right.set(xlabel="t [s]", ylabel="pressure [kPa]", title=f"Probe {probe}")
     fig.suptitle(run.summary["case"])
     fig.savefig(png, dpi=100)

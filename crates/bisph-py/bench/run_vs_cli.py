@@ -22,6 +22,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
+from typing import Dict, List
 
 import bisph
 
@@ -44,7 +45,8 @@ def python_run(case: str, out: Path, threads: int) -> float:
 
 
 def loop_seconds(out: Path) -> float:
-    return json.loads((out / "summary.json").read_text())["wall_seconds"]
+    """The time loop's wall seconds, from the run's `summary.json`."""
+    return float(json.loads((out / "summary.json").read_text())["wall_seconds"])
 
 
 def main() -> None:
@@ -54,8 +56,8 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=os.cpu_count())
     parser.add_argument("--bin", default=str(ROOT / "target" / "release" / "bisph"))
     args = parser.parse_args()
-    whole = {"cli": [], "python": []}
-    loop = {"cli": [], "python": []}
+    whole: Dict[str, List[float]] = {"cli": [], "python": []}
+    loop: Dict[str, List[float]] = {"cli": [], "python": []}
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             for who in ("cli", "python"):

@@ -1,7 +1,7 @@
 """Type stubs of the native module (see the docstrings there and docs/python.md)."""
 
 from os import PathLike
-from typing import Any, Callable, Dict, List, Mapping, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -112,12 +112,18 @@ class Simulation:
     @property
     def bodies(self) -> List[Dict[str, Any]]: ...
     def step(self) -> None: ...
+    @overload
     def run(
-        self,
-        until: Optional[float] = None,
-        out: Optional[_Path] = None,
-        progress: _Progress = None,
-    ) -> Optional[Dict[str, Any]]: ...
+        self, until: Optional[float] = None, out: None = None, progress: _Progress = None
+    ) -> None: ...
+    @overload
+    def run(
+        self, until: Optional[float], out: _Path, progress: _Progress = None
+    ) -> Dict[str, Any]: ...
+    @overload
+    def run(
+        self, until: Optional[float] = None, *, out: _Path, progress: _Progress = None
+    ) -> Dict[str, Any]: ...
 
 def shepard(
     case: Case, points: npt.ArrayLike, method: str = "geometric"
