@@ -99,7 +99,7 @@ pub fn progress_callable(progress: Option<&Bound<'_, PyAny>>) -> PyResult<Option
 }
 
 /// Runs `work` with the GIL released: on `pool` when given (else rayon's global pool) in a
-/// helper thread, while this thread checks for signals every few milliseconds and sets
+/// worker thread, while this thread checks for signals every few milliseconds and sets
 /// `stop` when a handler raises (Ctrl-C raises KeyboardInterrupt). `work` reads `stop`
 /// between steps, so it ends at a step boundary and leaves a usable state.
 pub fn run_released<T: Send>(
