@@ -381,7 +381,8 @@ impl Simulation {
     /// `out` (energy.csv, forces.csv, probes.csv, VTK frames, summary.json, plots) with
     /// values identical to the command line's for the same case, the series starting at the
     /// current time, and returns the summary (`summary.json`) as a dict. Without `out` it
-    /// takes the same steps and writes nothing (and returns `None`).
+    /// takes the same steps and writes nothing (and returns `None`); the divergence watches
+    /// of `[diagnostics]` run only with `out`.
     ///
     /// `progress`: a callable given a `bisph.Progress` after every step. Ctrl-C (or any
     /// signal handler that raises) stops the run at the next step boundary and raises
