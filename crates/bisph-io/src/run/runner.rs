@@ -158,10 +158,16 @@ fn settle_or_recall<V: CaseDim>(
     let settling = crate::run::settle::settle_reporting(loaded, sim, report)
         .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
     if let Some(s) = &settling {
-        let text = serde_json::to_string_pretty(s).expect("a settling report serialises");
-        write_atomic(&path, text.as_bytes())?;
+        write_settling(out, s)?;
     }
     Ok(settling)
+}
+
+/// Writes the settling report into the output folder (`settling.json`).
+fn write_settling(out: &Path, settling: &SettlingSummary) -> Result<(), RunError> {
+    let text = serde_json::to_string_pretty(settling).expect("a settling report serialises");
+    write_atomic(&out.join(SETTLING_FILE), text.as_bytes())?;
+    Ok(())
 }
 
 /// Progress report for a front end.
@@ -463,6 +469,33 @@ pub fn run<V: CaseDim>(
     let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
     let ending = active.advance_to_end(&mut sim, options, progress)?;
     active.finish(&mut sim, settling, ending)
+}
+
+/// Runs a simulation built (and settled) by the caller from its current state to the case's
+/// end time, writing the outputs of a fresh run into `out` exactly as [`run`] does after its
+/// build and settling: the entry point of front ends that hold the simulation themselves.
+/// `settling` is the report of the settling that preceded it, if any (`settling.json` and the
+/// summary's `settling`). The series and frames start at the simulation's current time.
+pub fn run_built<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    settling: Option<SettlingSummary>,
+    out: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
+    at(out, std::fs::create_dir_all(out))?;
+    crate::formats::files::remove_stale_temporaries(out);
+    let settling_path = out.join(SETTLING_FILE);
+    match &settling {
+        Some(s) => write_settling(out, s)?,
+        None if settling_path.exists() => at(&settling_path, std::fs::remove_file(&settling_path))?,
+        None => {}
+    }
+    let checkpoint_path = out.join(checkpoint::FILE_NAME);
+    let mut active = ActiveRun::open(loaded, out, sim, None, checkpoint_path)?;
+    let ending = active.advance_to_end(sim, options, progress)?;
+    active.finish(sim, settling, ending)
 }
 
 /// How the time loop of a run ended.
