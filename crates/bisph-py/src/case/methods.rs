@@ -1,23 +1,13 @@
-//! `bisph.Case`: a checked case file, from TOML or a dict, with the command line's `--set`.
+//! The Python methods of `bisph.Case`: reading TOML or a dict, `--set`, building.
 
+use super::Case;
 use crate::errors::{bad_argument, case_error};
 use crate::sim::{build, Simulation};
 use bisph_io::case::{load_case, parse_case};
-use bisph_io::LoadedCase;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::PathBuf;
-
-/// A checked case: the sections and keys of a case file (docs/case-reference.md), read from
-/// TOML or a dict, with the same strict parsing and named errors as `bisph run`.
-///
-/// A mistake raises `bisph.CaseError` with `file`, `key` and `message`.
-#[pyclass(module = "bisph")]
-#[derive(Clone)]
-pub struct Case {
-    pub(crate) loaded: LoadedCase,
-}
 
 #[pymethods]
 impl Case {
