@@ -27,6 +27,17 @@ pub struct Progress {
     pub settling: bool,
 }
 
+impl From<bisph_io::Progress> for Progress {
+    fn from(p: bisph_io::Progress) -> Self {
+        Progress {
+            time: p.time,
+            end: p.end,
+            step: p.step,
+            settling: p.settling,
+        }
+    }
+}
+
 #[pymethods]
 impl Progress {
     fn __repr__(&self) -> String {

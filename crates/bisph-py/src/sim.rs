@@ -3,14 +3,11 @@
 
 use crate::case::Case;
 use crate::errors::{bad_argument, case_error, run_error};
-use crate::run::{progress_callable, run_released, Progress, Stop};
+use crate::run::{progress_callable, run_released, Stop};
 use crate::solver::{ElementField, ParticleField, Solver};
-use bisph_io::case::build::build_simulation_with_layout;
-use bisph_io::case::geometry_check::check_geometry;
-use bisph_io::case::resources::check_memory;
 use bisph_io::case::CaseDim;
-use bisph_io::run::diagnostics::from_sim_error;
-use bisph_io::run::settle::{settle_reporting, SettlingSummary};
+use bisph_io::run::settle::SettlingSummary;
+use bisph_io::run::{build_checked, settle_fresh};
 use bisph_io::{parse_case, LoadedCase, RunError, RunOptions};
 use numpy::ndarray::{Array2, ArrayView1, ArrayView2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -85,23 +82,9 @@ fn build_in<V: CaseDim>(
     stop: &Stop,
     progress: Option<&Py<PyAny>>,
 ) -> Result<(Box<dyn Solver>, Option<SettlingSummary>), RunError> {
-    check_memory(loaded).map_err(RunError::Resources)?;
-    let (mut sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
-    check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
-    let report = &mut |p: bisph_io::run::settle::SettlingProgress| {
-        let (time, end, step, settling) = (p.time, p.max_time, p.step, true);
-        stop.report(
-            progress,
-            Progress {
-                time,
-                end,
-                step,
-                settling,
-            },
-        )
-    };
-    let settling = settle_reporting(loaded, &mut sim, report)
-        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, &sim))))?;
+    let mut sim = build_checked::<V>(loaded)?;
+    let report = &mut |p: bisph_io::Progress| stop.report(progress, p.into());
+    let settling = settle_fresh(loaded, &mut sim, report)?;
     Ok((Box::new(sim), settling))
 }
 
@@ -429,18 +412,7 @@ impl Simulation {
             stop: Some(&stop.flag),
             ..RunOptions::default()
         };
-        let report = &mut |p: bisph_io::Progress| {
-            let (time, end, step, settling) = (p.time, p.end, p.step, p.settling);
-            stop.report(
-                progress,
-                Progress {
-                    time,
-                    end,
-                    step,
-                    settling,
-                },
-            )
-        };
+        let report = &mut |p: bisph_io::Progress| stop.report(progress, p.into());
         let result = run_released(py, pool, &stop, || {
             solver.run_with_outputs(&loaded, settling, &out, &options, report)
         });

@@ -11,4 +11,7 @@ pub mod settle;
 pub mod shepard;
 
 pub use error::RunError;
-pub use runner::{resume_case, run_built, run_case, run_case_with, Progress, RunOptions, Summary};
+pub use runner::{
+    build_checked, resume_case, run_built, run_case, run_case_with, settle_fresh, Progress,
+    RunOptions, Summary,
+};

@@ -147,6 +147,21 @@ fn settle_or_recall<V: CaseDim>(
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
+    let settling = settle_fresh(loaded, sim, progress)?;
+    if let Some(s) = &settling {
+        write_settling(out, s)?;
+    }
+    Ok(settling)
+}
+
+/// Settles a fresh simulation when the case asks for it, as [`run`] does: `progress` sees
+/// every settling step (`settling: true`, the most settling time as `end`); a failed step is
+/// diagnosed as in a run.
+pub fn settle_fresh<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Option<SettlingSummary>, RunError> {
     let report = &mut |p: crate::run::settle::SettlingProgress| {
         progress(Progress {
             time: p.time,
@@ -155,12 +170,8 @@ fn settle_or_recall<V: CaseDim>(
             settling: true,
         })
     };
-    let settling = crate::run::settle::settle_reporting(loaded, sim, report)
-        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
-    if let Some(s) = &settling {
-        write_settling(out, s)?;
-    }
-    Ok(settling)
+    crate::run::settle::settle_reporting(loaded, sim, report)
+        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))
 }
 
 /// Writes the settling report into the output folder (`settling.json`).
@@ -446,6 +457,15 @@ fn start_run<V: CaseDim>(
     }
 }
 
+/// Builds the simulation of a fresh run after the memory estimate, and checks its geometry
+/// before any step: what [`run`] does first, and what front ends that hold the simulation call.
+pub fn build_checked<V: CaseDim>(loaded: &LoadedCase) -> Result<Simulation<V>, RunError> {
+    crate::case::resources::check_memory(loaded).map_err(RunError::Resources)?;
+    let (sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
+    check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
+    Ok(sim)
+}
+
 /// Builds and runs a case, writing `energy.csv`, `forces.csv`, `probes.csv`, VTK frames,
 /// `summary.json`, plots and a copy of the case into `out`; checkpoints into
 /// `out/checkpoint.bin`; on a tripped watch, `diagnostics.json`.
@@ -455,9 +475,7 @@ pub fn run<V: CaseDim>(
     options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
-    crate::case::resources::check_memory(loaded).map_err(RunError::Resources)?;
-    let (mut sim, layout) = build_simulation_with_layout::<V>(loaded).map_err(RunError::Case)?;
-    check_geometry(loaded, &sim, &layout).map_err(RunError::Geometry)?;
+    let mut sim = build_checked::<V>(loaded)?;
     at(out, std::fs::create_dir_all(out))?;
     crate::formats::files::remove_stale_temporaries(out);
     let checkpoint_path = out.join(checkpoint::FILE_NAME);
