@@ -100,6 +100,18 @@ impl Eos {
         }
     }
 
+    /// The hydrostatic density gradient at density `rho` over its value at `rho0`:
+    /// `dp = rho g dd` and `dp = c(rho)^2 drho` give `drho/dd = rho g / c(rho)^2`, which is
+    /// `(rho0 g / c0^2)` times `rho c0^2 / (rho0 c(rho)^2)`: linear, `rho / rho0`; Tait,
+    /// `(rho / rho0)^(2 - xi)`.
+    #[inline(always)]
+    pub fn hydrostatic_density_factor(&self, rho: f64) -> f64 {
+        match *self {
+            Eos::Linear { rho0, .. } => rho / rho0,
+            Eos::Tait { rho0, xi, .. } => (rho / rho0).powf(2.0 - xi),
+        }
+    }
+
     /// Sound speed at density `rho`, `sqrt(dp/drho)`.
     pub fn sound_speed(&self, rho: f64) -> f64 {
         match *self {
@@ -134,6 +146,14 @@ mod tests {
                     / (2.0 * step);
                 let rho = eos.density(eos.hydrostatic_pressure(g, d)).unwrap();
                 assert!((slope / (rho * g) - 1.0).abs() < 1e-8, "{eos:?} {d}");
+                let density_at = |d: f64| eos.density(eos.hydrostatic_pressure(g, d)).unwrap();
+                let density_slope = (density_at(d + step) - density_at(d - step)) / (2.0 * step);
+                let (rho0, c0) = (eos.rho0(), eos.c0());
+                let factor = density_slope / (rho0 * g / (c0 * c0));
+                assert!(
+                    (factor / eos.hydrostatic_density_factor(rho) - 1.0).abs() < 1e-7,
+                    "{eos:?} {d}: {factor}"
+                );
             }
             assert_eq!(eos.hydrostatic_pressure(g, 0.0), 0.0);
         }

@@ -2,6 +2,7 @@
 //! skew-adjointness of the fluid operators (eq 13), no power exchanged with fixed walls,
 //! and the fluid's power loss equal to `sum_j F_j . U_j` for moving walls (App. C).
 
+use bisph_core::eos::Eos;
 use bisph_core::geometry::{box_elements_2d, box_elements_3d, polyline_elements, ElementShape};
 use bisph_core::kernel::Wendland;
 use bisph_core::neighbours::{CellGrid, PairList};
@@ -92,6 +93,11 @@ fn powers<V: Vector>(
         diffusion: DensityDiffusion {
             scale: 0.0,
             hydrostatic_gradient: V::ZERO,
+            eos: Eos::Linear {
+                rho0: 1.0,
+                c0: 1.0,
+                p0: 0.0,
+            },
             form: DiffusionForm::Laplacian,
         },
         viscosity: Default::default(),

@@ -529,6 +529,7 @@ impl<V: Vector> Simulation<V> {
             diffusion: DensityDiffusion {
                 scale,
                 hydrostatic_gradient,
+                eos: c.eos,
                 form,
             },
             viscosity: c.viscosity,
