@@ -84,7 +84,7 @@ fn build_in<V: CaseDim>(
 ) -> Result<(Box<dyn Solver>, Option<SettlingSummary>), RunError> {
     let mut sim = build_checked::<V>(loaded)?;
     let report = &mut |p: bisph_io::Progress| stop.report(progress, p.into());
-    let settling = settle_fresh(loaded, &mut sim, report)?;
+    let settling = settle_fresh(loaded, &mut sim, Some(&stop.flag), report)?;
     Ok((Box::new(sim), settling))
 }
 

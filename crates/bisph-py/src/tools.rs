@@ -4,6 +4,7 @@
 use crate::case::Case;
 use crate::errors::{bad_argument, case_error};
 use crate::run::{run_released, Stop};
+use std::ops::ControlFlow;
 use bisph_core::packing::IterationStats;
 use bisph_core::walls::shepard::ShepardKind;
 use bisph_io::case::fill::pack_block;
@@ -84,7 +85,11 @@ fn pack_all<V: CaseDim>(
         if block.shape == BlockShape::Particles || stop.requested() {
             continue;
         }
-        let mut b = pack_block::<V>(loaded, k, &mut |_: &IterationStats| {})?;
+        let observe = &mut |_: &IterationStats| match stop.requested() {
+            true => ControlFlow::Break(()),
+            false => ControlFlow::Continue(()),
+        };
+        let mut b = pack_block::<V>(loaded, k, observe)?;
         let flat = |points: &[V]| -> Vec<f64> {
             points
                 .iter()
@@ -113,7 +118,7 @@ fn pack_all<V: CaseDim>(
 /// `shape = "particles"` are skipped): `block` (its index in `fluid_block`), `positions`
 /// (n, dim) [m], `lattice` (the start, (n, dim)) [m], `frozen` (n,) bool, `wall_distance`
 /// (n,) [m], `grad_c` (n,) (|grad C|, [1/m]) and `iterations`. The GIL is released while
-/// packing; Ctrl-C takes effect between blocks.
+/// packing; Ctrl-C stops it after the iteration in progress (KeyboardInterrupt).
 #[pyfunction]
 pub fn pack<'py>(py: Python<'py>, case: &Case) -> PyResult<Bound<'py, PyList>> {
     let loaded = &case.loaded;

@@ -1,14 +1,17 @@
-"""KeyboardInterrupt stops a run between steps and leaves the simulation usable."""
+"""KeyboardInterrupt stops a run between steps and leaves the simulation usable; it stops
+settling and packing too."""
 
 from __future__ import annotations
 
 import _thread
 import signal
+import threading
+import time
 
 import pytest
 
 import bisph
-from conftest import small_case
+from conftest import CASES, STILL_WATER, small_case
 
 
 #: Steps after which a run that was not interrupted fails the test instead of running on.
@@ -59,3 +62,32 @@ def test_keyboard_interrupt_with_outputs_leaves_a_checkpoint(tmp_path):
     steps = sim.steps
     sim.run(until=sim.time + 5 * sim.dt, out=tmp_path / "after")
     assert sim.steps > steps
+
+
+def test_keyboard_interrupt_stops_settling_and_build_raises():
+    seen = []
+
+    def progress(p: bisph.Progress) -> None:
+        seen.append(p)
+        if p.step == 5:
+            _thread.interrupt_main()
+
+    with pytest.raises(KeyboardInterrupt):
+        small_case(STILL_WATER).build(progress=progress)
+    assert all(p.settling for p in seen)
+    assert 5 <= seen[-1].step < 20  # settling alone takes hundreds of steps
+
+
+def test_keyboard_interrupt_stops_packing():
+    case = bisph.Case.from_toml(str(CASES / "pack-trapezoid-2d.toml"))
+    case.set("resolution.dx", 0.025)
+    start = time.perf_counter()
+    bisph.pack(case)
+    whole = time.perf_counter() - start
+    timer = threading.Timer(0.05 * whole, _thread.interrupt_main)
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        bisph.pack(case)
+    # Stopped after the iteration in progress, not at the end of the block.
+    assert time.perf_counter() - start < 0.5 * whole

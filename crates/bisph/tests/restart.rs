@@ -434,6 +434,39 @@ fn sigterm_checkpoints_and_resumes() {
     compare(&reference, &dir, "sigterm");
 }
 
+/// SIGTERM while settling: settling stops after its step in progress, and the run exits with
+/// code 10 saying that nothing was started (no checkpoint, no summary).
+#[test]
+fn sigterm_while_settling_stops_it() {
+    let dir = temp_dir("term-settling");
+    let case = cases_dir().join("still-water-slope-2d.toml");
+    let child = exe()
+        .arg("run")
+        .arg(&case)
+        .arg("--out")
+        .arg(&dir)
+        .args(["--quiet", "--threads", "1", "--set", "settle.max_time=1000"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Settling to its tolerance takes tens of seconds of wall time; the signal comes first.
+    std::thread::sleep(Duration::from_millis(500));
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let start = Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(start.elapsed() < Duration::from_secs(10), "{stderr}");
+    assert_eq!(out.status.code(), Some(10), "{stderr}");
+    assert!(stderr.starts_with("interrupted while settling"), "{stderr}");
+    assert!(!dir.join("checkpoint.bin").exists());
+    assert!(!dir.join("summary.json").exists());
+}
+
 /// Damaged, truncated, foreign and missing checkpoints are refused with exit code 5 and a
 /// message naming the file, before anything is written.
 #[test]

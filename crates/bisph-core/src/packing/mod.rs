@@ -37,6 +37,7 @@ use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::walls::BoundaryElements;
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 
 /// Parameters of BIPI; lengths in units of `dx` unless said otherwise.
 #[derive(Clone, Debug, PartialEq)]
@@ -581,12 +582,18 @@ impl<V: ElementIntegrals> Packer<V> {
     }
 
     /// Runs stages 2a, 2b and 2c, calling `observe` with the metrics of the lattice and of
-    /// every iteration; returns the metrics of all iterations.
-    pub fn run(&mut self, mut observe: impl FnMut(&IterationStats)) -> Vec<IterationStats> {
+    /// every iteration; returns the metrics of all iterations. `Break` from `observe` stops
+    /// packing after that iteration (the positions reached are kept).
+    pub fn run(
+        &mut self,
+        mut observe: impl FnMut(&IterationStats) -> ControlFlow<()>,
+    ) -> Vec<IterationStats> {
         let mut history = Vec::new();
         let first = self.iterate(Stage::Start, true);
-        observe(&first);
         history.push(first);
+        if observe(&first).is_break() {
+            return history;
+        }
         let p = self.params.clone();
         let has_walls = !self.walls.elements.is_empty();
         // Stage 2a.
@@ -596,9 +603,11 @@ impl<V: ElementIntegrals> Packer<V> {
                 self.iteration += 1;
                 let full = p.report_interval > 0 && k % p.report_interval.max(1) == 0;
                 let s = self.iterate(Stage::A, full);
-                observe(&s);
                 tpd.push(s.tpd);
                 history.push(s);
+                if observe(&s).is_break() {
+                    return history;
+                }
                 if k > p.plateau_window {
                     let (now, then) = (tpd[k - 1], tpd[k - 1 - p.plateau_window]);
                     if (now - then).abs() <= p.plateau_tolerance * now.abs() {
@@ -625,9 +634,11 @@ impl<V: ElementIntegrals> Packer<V> {
         for k in 1..=p.stage_c_iterations {
             self.iteration += 1;
             let s = self.iterate(Stage::C, true);
-            observe(&s);
             means.push(s.gradc_mean_all);
             history.push(s);
+            if observe(&s).is_break() {
+                return history;
+            }
             if p.stage_c_tolerance > 0.0 && k > p.plateau_window {
                 let (now, then) = (means[k - 1], means[k - 1 - p.plateau_window]);
                 if (now - then).abs() <= p.stage_c_tolerance * now.abs() {
@@ -640,7 +651,8 @@ impl<V: ElementIntegrals> Packer<V> {
         last.iteration = self.iteration + 1;
         last.stage = Stage::C;
         last.tpd = history.last().map_or(0.0, |s| s.tpd);
-        observe(&last);
+        // The last report: nothing is left to stop.
+        let _ = observe(&last);
         history.push(last);
         history
     }
@@ -929,7 +941,7 @@ mod tests {
         params.stage_c_iterations = 200;
         let walls = PackWalls::new(&region.elements(dx), 2.0 * params.h);
         let mut packer = Packer::new(params, lattice, walls).unwrap();
-        let history = packer.run(|_| {});
+        let history = packer.run(|_| ControlFlow::Continue(()));
         let (first, last) = (history[0], *history.last().unwrap());
         assert!(
             last.gradc_mean_all < 0.5 * first.gradc_mean_all,

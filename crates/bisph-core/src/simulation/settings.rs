@@ -58,6 +58,8 @@ pub enum SettleOutcome {
     /// The fluid gained more kinetic energy than a resting start can release (it flows, as a
     /// dam-break column does, or the scheme is unstable): the original start is kept.
     NotAtRest,
+    /// The caller stopped it between two steps: the state reached is kept, at zero velocity.
+    Interrupted,
 }
 
 /// What settling did.

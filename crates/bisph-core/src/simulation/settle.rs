@@ -21,16 +21,18 @@ use crate::error::SimError;
 use crate::particles::Fluid;
 use crate::walls::geometric_shepard;
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 impl<V: Vector> Simulation<V> {
     /// Settles the fluid (see the module documentation) with the walls held at their
     /// `t = 0` place, then restarts the clock and the energy books at the state reached.
-    /// `on_step` sees the report after every settling step.
+    /// `on_step` sees the report after every settling step; returning `Break` stops settling
+    /// there ([`SettleOutcome::Interrupted`]).
     pub fn settle(
         &mut self,
         params: &SettleParams,
-        on_step: &mut dyn FnMut(&SettleReport),
+        on_step: &mut dyn FnMut(&SettleReport) -> ControlFlow<()>,
     ) -> Result<SettleReport, SimError> {
         let clock = Instant::now();
         let original = self.fluid.clone();
@@ -58,7 +60,10 @@ impl<V: Vector> Simulation<V> {
             report.max_speed = self.max_speed();
             report.max_acceleration = self.max_acceleration();
             report.max_displacement = max_displacement(&self.fluid, &start);
-            on_step(&report);
+            if on_step(&report).is_break() {
+                report.outcome = SettleOutcome::Interrupted;
+                break;
+            }
             if self.energy().kinetic > params.max_kinetic {
                 report.outcome = SettleOutcome::NotAtRest;
                 break;

@@ -10,6 +10,7 @@ use bisph_core::packing::{IterationStats, PackParams, PackWalls, Packer};
 use bisph_core::walls::usaw::{self, FitSetting};
 use bisph_core::walls::BoundaryElements;
 use bisph_core::{Eos, Vector, Wendland};
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// The initial particle positions of block `k`: read from a file (`shape = "particles"`),
@@ -29,7 +30,8 @@ pub fn block_points<V: CaseDim>(
         return Ok(rows.iter().map(|r| V::from_slice(r)).collect());
     }
     if block.bipi() {
-        let packed = crate::case::fill::pack_block::<V>(loaded, k, &mut |_| {})?;
+        let packed =
+            crate::case::fill::pack_block::<V>(loaded, k, &mut |_| ControlFlow::Continue(()))?;
         return Ok(packed.packer.positions);
     }
     if block.shape == BlockShape::Walls {
@@ -137,11 +139,12 @@ pub struct PackedBlock<V: CaseDim> {
     pub seconds: f64,
 }
 
-/// Packs block `k` of a case (steps 1 and 2 of paper 4).
+/// Packs block `k` of a case (steps 1 and 2 of paper 4); `observe` sees every iteration and
+/// may stop packing there (`Break`).
 pub fn pack_block<V: CaseDim>(
     loaded: &LoadedCase,
     k: usize,
-    observe: &mut dyn FnMut(&IterationStats),
+    observe: &mut dyn FnMut(&IterationStats) -> ControlFlow<()>,
 ) -> Result<PackedBlock<V>, CaseError> {
     let case = &loaded.case;
     let block = &case.fluid_block[k];

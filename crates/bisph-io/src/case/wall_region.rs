@@ -616,7 +616,10 @@ level = 0.5
     fn bipi_packs_the_water_inside_2d_walls() {
         let text = TANK_2D.replace("level = 0.5", "level = 0.5\nfill = \"bipi\"");
         let l = loaded(&text);
-        let packed = crate::case::fill::pack_block::<DVec2>(&l, 0, &mut |_| {}).unwrap();
+        let packed = crate::case::fill::pack_block::<DVec2>(&l, 0, &mut |_| {
+            std::ops::ControlFlow::Continue(())
+        })
+        .unwrap();
         let x = &packed.packer.positions;
         assert_eq!(x.len(), packed.region.lattice.len());
         assert!(x.iter().all(|&p| packed.region.contains(p)));

@@ -29,6 +29,11 @@ pub enum RunError {
         /// The checkpoint to resume from.
         checkpoint: PathBuf,
     },
+    /// Settling was interrupted by a signal, before `t = 0` (nothing to resume from).
+    SettlingInterrupted {
+        /// Settling time reached [s].
+        time: f64,
+    },
     /// A divergence watch tripped (outputs up to the last good state are kept;
     /// `diagnostics.json` says what happened).
     Stopped(Box<Diagnosis>),
@@ -43,7 +48,7 @@ impl RunError {
             RunError::Output(_) => 4,
             RunError::Checkpoint(_) => 5,
             RunError::Resources(_) => 6,
-            RunError::Interrupted { .. } => 10,
+            RunError::Interrupted { .. } | RunError::SettlingInterrupted { .. } => 10,
             RunError::Stopped(d) => d.exit_code,
         }
     }
@@ -65,6 +70,10 @@ impl std::fmt::Display for RunError {
                 f,
                 "interrupted at step {step} (t = {time:.6e} s); checkpoint written to {}",
                 checkpoint.display()
+            ),
+            RunError::SettlingInterrupted { time } => write!(
+                f,
+                "interrupted while settling (settling time {time:.3} s), before the run started: nothing to resume, run it again"
             ),
             RunError::Stopped(d) => write!(f, "simulation stopped: {d}"),
         }

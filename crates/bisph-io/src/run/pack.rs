@@ -25,6 +25,7 @@ use crate::run::error::RunError;
 use bisph_core::packing::{IterationStats, Packer, Stage};
 use serde::Serialize;
 use std::fmt::Write as _;
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
 
@@ -220,8 +221,11 @@ fn pack_dim<V: CaseDim>(
             }
             continue;
         }
-        let mut packed =
-            pack_block::<V>(loaded, k, &mut |s| progress(k, s)).map_err(RunError::Case)?;
+        let observe = &mut |s: &IterationStats| {
+            progress(k, s);
+            ControlFlow::Continue(())
+        };
+        let mut packed = pack_block::<V>(loaded, k, observe).map_err(RunError::Case)?;
         append_history_rows(&mut outputs.csv, k, &packed.history);
         let distances = packed.packer.wall_distances();
         summaries.push(block_summary(k, block.solid, &packed, &distances));

@@ -19,8 +19,9 @@ use bisph_core::energy::energy_scale;
 use bisph_core::simulation::MidpointParams;
 use bisph_core::Simulation;
 use serde::Serialize;
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Wall-clock seconds of the time loop by phase.
@@ -135,6 +136,7 @@ fn settle_or_recall<V: CaseDim>(
     sim: &mut Simulation<V>,
     out: &Path,
     resumed: bool,
+    stop: Option<&AtomicBool>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Option<SettlingSummary>, RunError> {
     let path = out.join(SETTLING_FILE);
@@ -147,7 +149,7 @@ fn settle_or_recall<V: CaseDim>(
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = settle_fresh(loaded, sim, progress)?;
+    let settling = settle_fresh(loaded, sim, stop, progress)?;
     if let Some(s) = &settling {
         write_settling(out, s)?;
     }
@@ -156,10 +158,12 @@ fn settle_or_recall<V: CaseDim>(
 
 /// Settles a fresh simulation when the case asks for it, as [`run`] does: `progress` sees
 /// every settling step (`settling: true`, the most settling time as `end`); a failed step is
-/// diagnosed as in a run.
+/// diagnosed as in a run; `stop`, once set, ends settling after the step in progress with
+/// [`RunError::SettlingInterrupted`].
 pub fn settle_fresh<V: CaseDim>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
+    stop: Option<&AtomicBool>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Option<SettlingSummary>, RunError> {
     let report = &mut |p: crate::run::settle::SettlingProgress| {
@@ -168,10 +172,18 @@ pub fn settle_fresh<V: CaseDim>(
             end: p.max_time,
             step: p.step,
             settling: true,
-        })
+        });
+        match stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+            true => ControlFlow::Break(()),
+            false => ControlFlow::Continue(()),
+        }
     };
-    crate::run::settle::settle_reporting(loaded, sim, report)
-        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))
+    let settling = crate::run::settle::settle_reporting(loaded, sim, report)
+        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
+    match settling {
+        Some(s) if s.interrupted() => Err(RunError::SettlingInterrupted { time: s.time }),
+        other => Ok(other),
+    }
 }
 
 /// Writes the settling report into the output folder (`settling.json`).
@@ -483,7 +495,14 @@ pub fn run<V: CaseDim>(
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
-    let settling = settle_or_recall(loaded, &mut sim, out, resumed.is_some(), progress)?;
+    let settling = settle_or_recall(
+        loaded,
+        &mut sim,
+        out,
+        resumed.is_some(),
+        options.stop,
+        progress,
+    )?;
     let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
     let ending = active.advance_to_end(&mut sim, options, progress)?;
     active.finish(&mut sim, settling, ending)
@@ -682,9 +701,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                 return Ok(Ending::Reached);
             }
             self.mark_good(sim);
-            let signalled = options
-                .stop
-                .is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+            let signalled = options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
             if self.checkpoint_due(sim.step, signalled, options)
                 && Some(sim.step) != self.resumed_from_step
             {

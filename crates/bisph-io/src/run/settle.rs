@@ -5,6 +5,7 @@ use crate::case::schema::LoadedCase;
 use bisph_core::simulation::{SettleOutcome, SettleParams, SettleReport};
 use bisph_core::{Simulation, Vector};
 use serde::{Deserialize, Serialize};
+use std::ops::ControlFlow;
 
 /// Default tolerance of `settle.tolerance`.
 pub const DEFAULT_TOLERANCE: f64 = 1e-3;
@@ -39,13 +40,23 @@ pub struct SettlingSummary {
     pub max_displacement: f64,
 }
 
+/// The outcome of settling stopped by the caller (never in `summary.json`: the run does not
+/// start).
+const INTERRUPTED: &str = "interrupted";
+
 impl SettlingSummary {
+    /// Whether the caller stopped settling before it ended.
+    pub fn interrupted(&self) -> bool {
+        self.outcome == INTERRUPTED
+    }
+
     fn new(report: &SettleReport, params: &SettleParams) -> Self {
         SettlingSummary {
             outcome: match report.outcome {
                 SettleOutcome::Settled => "settled",
                 SettleOutcome::TimedOut => "timed_out",
                 SettleOutcome::NotAtRest => "not_at_rest",
+                SettleOutcome::Interrupted => INTERRUPTED,
             }
             .into(),
             steps: report.steps,
@@ -104,15 +115,16 @@ pub fn settle<V: Vector>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
 ) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
-    settle_reporting(loaded, sim, &mut |_| {})
+    settle_reporting(loaded, sim, &mut |_| ControlFlow::Continue(()))
 }
 
 /// [`settle`], calling `progress` after every settling step with the settling time, the most
-/// settling time and the steps so far.
+/// settling time and the steps so far; `Break` from it stops settling at that step (outcome
+/// `interrupted`).
 pub fn settle_reporting<V: Vector>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
-    progress: &mut dyn FnMut(SettlingProgress),
+    progress: &mut dyn FnMut(SettlingProgress) -> ControlFlow<()>,
 ) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
     let Some(params) = params(loaded, sim) else {
         return Ok(None);
