@@ -707,6 +707,41 @@ impl<V: Vector> PairList<V> {
             });
     }
 
+    /// Lists the neighbours within `radius` of every point of `points` among `points` from
+    /// `candidates` (built over the same points, none of which has moved more than half its
+    /// skin since), with `factor(|r_ij|)` per pair, in the candidates' order; in parallel over
+    /// blocks (the content does not depend on the number of threads).
+    pub fn rebuild_from_candidates(
+        &mut self,
+        candidates: &CandidateList<V>,
+        points: &[V],
+        radius: f64,
+        factor: impl Fn(f64) -> f64 + Sync,
+    ) {
+        self.queries = points.len();
+        self.blocks
+            .resize_with(points.len().div_ceil(Self::BLOCK), Default::default);
+        self.blocks
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(b, block)| {
+                block.start.clear();
+                block.index.clear();
+                block.offset.clear();
+                block.factor.clear();
+                block.start.push(0);
+                let first = b * Self::BLOCK;
+                for (i, &x) in points.iter().enumerate().skip(first).take(Self::BLOCK) {
+                    candidates.for_each_neighbour(i, x, points, radius, |j, r_ij, r| {
+                        block.index.push(j as u32);
+                        block.offset.push(r_ij);
+                        block.factor.push(factor(r));
+                    });
+                    block.start.push(block.index.len() as u32);
+                }
+            });
+    }
+
     /// The listed neighbours of query `i`, their offsets `r_ij` and factors, in the order of
     /// [`CellGrid::for_each_neighbour`].
     #[inline(always)]

@@ -171,8 +171,7 @@ impl<V: Vector> Simulation<V> {
         self.last_dt = dt;
         self.check_state()?;
         self.walls.move_to(self.time);
-        let interval = self.config.reorder_interval;
-        self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+        self.step_neighbours();
         self.refresh_pressure();
         Ok(())
     }

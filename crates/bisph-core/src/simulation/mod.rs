@@ -104,11 +104,12 @@ pub struct SimConfig<V: Vector> {
     /// Reorder particles into the cell grid's storage order (rows of cells along a Morton
     /// curve) every this many steps (0 = never).
     pub reorder_interval: u64,
-    /// Skin of the explicit (Verlet) scheme's neighbour list, as a fraction of the kernel
-    /// support (0 = search the cell grid at every step): candidates within
-    /// `support (1 + skin)` are listed and kept until a particle has moved half the skin
+    /// Skin of the neighbour list kept across steps, as a fraction of the kernel support
+    /// (0 = search the cell grid at every step): candidates within `support (1 + skin)` are
+    /// listed and kept until a particle has moved half the skin
     /// ([`crate::neighbours::CandidateList`]); the particles are reordered only when it is
-    /// rebuilt. Not used by the midpoint scheme, nor when the list would exceed
+    /// rebuilt. The explicit scheme sweeps the candidates; the midpoint scheme lists its
+    /// pairs for a step from them. Not used when the list would exceed
     /// [`CANDIDATE_LIST_BUDGET`].
     pub neighbour_skin: f64,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
@@ -147,8 +148,8 @@ struct Scratch<V> {
     particle_elements: PairList<V>,
     element_particles: PairList<V>,
     wall_pairs_listed: bool,
-    /// The explicit scheme's Verlet list (see [`SimConfig::neighbour_skin`]), valid while
-    /// `candidates_valid` and no particle moved more than `skin / 2` since its build.
+    /// The Verlet list (see [`SimConfig::neighbour_skin`]), valid while `candidates_valid`
+    /// and no particle moved more than `skin / 2` since its build.
     candidates: CandidateList<V>,
     candidates_valid: bool,
     /// The list was checked for the current positions: the next rate evaluation reads it.
@@ -237,14 +238,11 @@ impl<V: Vector> Simulation<V> {
         probes: Vec<Probe<V>>,
     ) -> Self {
         let cell = config.kernel.support;
-        // The explicit scheme's Verlet list needs fluid cells of the listing radius (when
-        // every period can hold three of them).
+        // The Verlet list needs fluid cells of the listing radius (when every period can
+        // hold three of them).
         let skin = cell * config.neighbour_skin;
         let list_bytes = 4.0 * listed_pairs(&config, fluid.len(), cell + skin);
-        let skin = if config.integrator == Integrator::Verlet
-            && skin > 0.0
-            && list_bytes <= CANDIDATE_LIST_BUDGET as f64
-        {
+        let skin = if skin > 0.0 && list_bytes <= CANDIDATE_LIST_BUDGET as f64 {
             skin
         } else {
             0.0
@@ -565,14 +563,14 @@ impl<V: Vector> Simulation<V> {
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
-    /// The neighbour data of an explicit step at the current positions: with a skin
+    /// The neighbour data of a step at the current positions: with a skin
     /// ([`SimConfig::neighbour_skin`]), the Verlet list is kept while it holds (no particle
     /// moved more than half the skin; the cell grid is then kept too, its cells being the
     /// listing radius wide, or rebuilt without reordering across periodic axes, where
     /// particles wrap), else the grid is rebuilt (the particles reordered when
     /// `reorder_interval` > 0) and the list with it. Without a skin, the grid is rebuilt
     /// (reordered every `reorder_interval` steps).
-    pub(crate) fn explicit_neighbours(&mut self) {
+    pub(crate) fn step_neighbours(&mut self) {
         let interval = self.config.reorder_interval;
         let skin = self.scratch.skin;
         if skin <= 0.0 {
@@ -600,7 +598,7 @@ impl<V: Vector> Simulation<V> {
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
-    /// The positions at which the explicit scheme's Verlet list in use was built (`None`
+    /// The positions at which the Verlet list in use was built (`None`
     /// without a skin or before the first build). A checkpoint saves them so that a resumed
     /// run rebuilds the same list and keeps it for the same steps as an uninterrupted one.
     pub fn neighbour_list_origin(&self) -> Option<&[V]> {
@@ -647,7 +645,8 @@ impl<V: Vector> Simulation<V> {
     /// Lists the fluid pairs at the current positions with their kernel gradient factors,
     /// for the rate evaluations until [`Simulation::forget_pairs`] (the iterations of a
     /// midpoint step, whose positions and grid are frozen): they then skip the neighbour
-    /// search and give the same bits. Does nothing when the list would take more than
+    /// search and give the same bits. The pairs come from the Verlet list while it holds,
+    /// else from the cell grid. Does nothing when the list would take more than
     /// [`PAIR_LIST_BUDGET`] bytes (estimated from the particle spacing, 25% over a lattice).
     pub(crate) fn list_pairs(&mut self) {
         let start = Instant::now();
@@ -659,12 +658,17 @@ impl<V: Vector> Simulation<V> {
             return;
         }
         let position = &self.fluid.position;
-        self.scratch
-            .pairs
-            .rebuild(&self.fluid_grid, position, position, kernel.support, |r| {
-                kernel.gradient_factor(r)
-            });
-        self.scratch.pairs_listed = true;
+        let factor = |r| kernel.gradient_factor(r);
+        let s = &mut self.scratch;
+        if s.skin > 0.0 && s.candidates_valid && s.candidates.holds(position, 0.5 * s.skin) {
+            let candidates = &s.candidates;
+            s.pairs
+                .rebuild_from_candidates(candidates, position, kernel.support, factor);
+        } else {
+            s.pairs
+                .rebuild(&self.fluid_grid, position, position, kernel.support, factor);
+        }
+        s.pairs_listed = true;
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
         // (once per side); a wetted element sees at most half a kernel sphere of particles.
         let elements = self.walls.elements.len();

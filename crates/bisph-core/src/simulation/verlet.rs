@@ -67,7 +67,7 @@ impl<V: Vector> Simulation<V> {
         self.check_state()?;
         // 2. walls, neighbours, rates at the predicted state.
         self.walls.move_to(self.time);
-        self.explicit_neighbours();
+        self.step_neighbours();
         self.advance_gamma(dt);
         if summation {
             self.summation_densities(dt);
