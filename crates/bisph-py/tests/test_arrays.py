@@ -9,6 +9,8 @@ import bisph
 from conftest import STILL_WATER, small_case
 
 G, RHO0, DEPTH = 9.81, 1000.0, 0.5
+#: Sound speed of cases/hydrostatic-2d.toml [m/s].
+C0 = 22.15
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +30,10 @@ def test_particle_arrays_have_their_shapes_dtypes_and_units(tank):
     x, y = tank.positions.T
     assert 0 < x.min() and x.max() < 1 and 0 < y.min() and y.max() < DEPTH + 0.05  # m
     assert np.allclose(tank.density, RHO0, rtol=0.02)  # kg/m^3
-    assert tank.mass.sum() == pytest.approx(RHO0 * 1.0 * DEPTH, rel=1e-9)  # kg per m depth
+    # kg per m depth: the lattice's cells times the initial (hydrostatic, linear equation of
+    # state) density rho0 (1 + g d / c0^2), whose mean over the depth is exact on the rows.
+    mass = RHO0 * 1.0 * DEPTH * (1.0 + G * DEPTH / (2.0 * C0**2))
+    assert tank.mass.sum() == pytest.approx(mass, rel=1e-9)
     # Hydrostatic pressure [Pa]: rho g (H - y) up to the particle spacing.
     assert np.allclose(tank.pressure, RHO0 * G * (DEPTH - y), atol=RHO0 * G * 0.05)
     assert np.abs(tank.velocities).max() < 0.01 * np.sqrt(G * DEPTH)  # m/s, settled

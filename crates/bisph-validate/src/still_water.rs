@@ -46,7 +46,7 @@ const USAW: Model = Model {
 const ENERGY_WALL_PRESSURE: &str = "the energy walls' wall pressure (paper 1, eq 71) weighs half a kernel of a pressure that grows away from the wall, so it overestimates the load on a bottom by an amount that falls with dx";
 const ENERGY_LIMITATION: &str = "the energy-conserving walls are zeroth-order consistent (paper 1): within a kernel support of a wall that is not horizontal the model has no static rest state (the fluid sum gives only the part gamma of the vertical pressure gradient, docs/design.md), so a slow flow stays along the sloped and side walls; and the wall pressure of eq 71 overestimates the bottom load at this resolution";
 
-const SPHERIC_LIMITATION: &str = "not met yet around the SPHERIC obstacle at quick resolution: at dx = 0.55/5 the obstacle is 1.5 dx long and tall, inside one kernel support; with 5 s of settling the particles around it rearrange by up to 0.45 m, settling ends at 8% of sqrt(g H), the run peaks at 13% of sqrt(g H) with the fastest particles all next to the obstacle, and the bottom pressure is 2% low; the Gauss boundary quadrature gives the same figures as the centre rule, so the quadrature is not the cause";
+const SPHERIC_LIMITATION: &str = "not met yet around the SPHERIC obstacle at quick resolution: at dx = 0.55/5 the obstacle is 1.5 dx long and tall, inside one kernel support; with 5 s of settling the particles around it rearrange by up to 0.45 m, settling ends at 8% of sqrt(g H), the run peaks at 13% of sqrt(g H) with the fastest particles all next to the obstacle, and the bottom pressure is 2.3% low; the Gauss boundary quadrature gives the same figures as the centre rule, so the quadrature is not the cause";
 
 /// One tank and the models it is run with, with the bars each model is known not to meet yet
 /// (by check key: `end`, `speed`, `growth`, `bottom`, `behind`) and why.
@@ -92,7 +92,7 @@ const TANKS: [Tank; 4] = [
         quick_settling: None,
         bottom: [0.15, 0.0, 0.0],
         models: &[
-            (ENERGY, &["speed", "bottom"], ENERGY_LIMITATION),
+            (ENERGY, &["bottom"], ENERGY_LIMITATION),
             (BI, &[], ""),
             (USAW, &[], ""),
         ],

@@ -505,25 +505,17 @@ impl<V: Vector> Walls<V> {
         Some(d)
     }
 
-    /// Number of points (fluid particles) that lie behind the walls: their nearest element
-    /// within `radius` (by distance to the element's plane patch, approximated by the centre
-    /// distance) has them on its wall side, `(x - c_j) . n_j > 0`. A diagnostic of particles
+    /// Number of points (fluid particles) that lie behind the walls within `radius` of them:
+    /// [`Walls::signed_distance`] positive (the side of the angle-weighted pseudonormal at the
+    /// nearest point of the surface, exact at edges and corners). A diagnostic of particles
     /// that got into a body or through a wall.
     pub fn count_behind(&self, points: &[V], radius: f64) -> usize {
         use rayon::prelude::*;
-        let e = &self.elements;
         points
             .par_iter()
             .filter(|&&x| {
-                let mut best = (f64::INFINITY, 0.0);
-                self.grid
-                    .for_each_candidate_within(x, radius + e.max_reach, |j| {
-                        let d = (e.centre[j] - x).length_squared();
-                        if d < best.0 {
-                            best = (d, (x - e.centre[j]).dot(e.normal[j]));
-                        }
-                    });
-                best.0.is_finite() && best.1 > 0.0
+                self.may_be_behind(x, radius)
+                    && self.signed_distance(x, radius).is_some_and(|d| d > 0.0)
             })
             .count()
     }
@@ -822,6 +814,42 @@ mod signed_distance_tests {
         assert!(walls
             .signed_distance(DVec2::new(1.0, 0.6), radius)
             .is_none());
+    }
+
+    /// `count_behind` counts exactly the points outside the tank within reach of a wall, at
+    /// the wedge's convex corners (where the nearest element centre can face away) as well.
+    #[test]
+    fn count_behind_counts_the_points_outside() {
+        let s = 0.5f64.sqrt() * 0.25;
+        let tank = [
+            DVec2::new(0.0, 1.0),
+            DVec2::new(0.0, 0.0),
+            DVec2::new(0.85, 0.0),
+            DVec2::new(0.85 + s, s),
+            DVec2::new(0.85 + 2.0 * s, 0.0),
+            DVec2::new(2.2, 0.0),
+            DVec2::new(2.2, 1.0),
+        ];
+        // Elements as long as the support: the nearest centre is a poor guide at corners.
+        let walls = walls_2d(&[(&tank, false)], 0.1);
+        let radius = 0.1;
+        let points: Vec<DVec2> = (0..223)
+            .flat_map(|i| (0..95).map(move |k| (i, k)))
+            .map(|(i, k)| DVec2::new(-0.05 + 0.01003 * i as f64, -0.05 + 0.00997 * k as f64))
+            .collect();
+        let outside = points
+            .iter()
+            .filter(|&&x| {
+                let near = (0..tank.len() - 1).any(|m| {
+                    let (a, b) = (tank[m], tank[m + 1]);
+                    let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                    (x - a - (b - a) * t).length() < radius
+                });
+                near && winding_number(x, &tank) == 0
+            })
+            .count();
+        assert!(outside > 500, "{outside}");
+        assert_eq!(walls.count_behind(&points, radius), outside);
     }
 
     /// An open-top 3-D box of triangles: behind outside the box, in front inside it, at

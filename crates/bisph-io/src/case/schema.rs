@@ -268,12 +268,9 @@ impl Case {
         })
     }
 
-    /// The mass rule of block `block`: `mass`, or the wall model's (`"initial"` for `usaw`).
+    /// The mass rule of block `block`: `mass`, or `"initial"` (volumes that tile the lattice).
     pub fn mass_rule(&self, block: &FluidBlock) -> MassRule {
-        block.mass.unwrap_or(match self.boundary {
-            BoundaryName::Usaw => MassRule::Initial,
-            BoundaryName::Energy | BoundaryName::Bi => MassRule::Reference,
-        })
+        block.mass.unwrap_or(MassRule::Initial)
     }
 
     /// `true` when block `block` is relaxed to fit usaw walls before the run: `fill = "usaw"`,
@@ -805,9 +802,9 @@ pub struct FluidBlock {
     /// the back wall, zero at the dam face).
     pub pressure_taper: Option<TaperSpec>,
     /// Particle masses: `"reference"` (`rho0 dx^d`) or `"initial"` (`rho dx^d` with the
-    /// initial density, for a fluid that starts compressed). Default: `"initial"` with
-    /// `boundary = "usaw"` (volumes that tile the lattice, so the hydrostatic start weighs
-    /// what its pressure says), else `"reference"` ([`Case::mass_rule`]). With `boundary =
+    /// initial density, for a fluid that starts compressed). Default: `"initial"` (volumes
+    /// that tile the lattice, so the hydrostatic start weighs what its pressure says and its
+    /// densities agree with the particle spacing; [`Case::mass_rule`]). With `boundary =
     /// "usaw"` and every block `"initial"`, the vertex particles' masses follow: `rho_v V_v`
     /// with their initial extrapolated densities.
     pub mass: Option<MassRule>,
