@@ -4,7 +4,6 @@
 use crate::case::Case;
 use crate::errors::{bad_argument, case_error};
 use crate::run::{run_released, Stop};
-use std::ops::ControlFlow;
 use bisph_core::packing::IterationStats;
 use bisph_core::walls::shepard::ShepardKind;
 use bisph_io::case::fill::pack_block;
@@ -14,6 +13,7 @@ use bisph_io::LoadedCase;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::ops::ControlFlow;
 
 /// The Shepard factor gamma [-] of the case's walls at `points` (shape `(k, dim)`), as
 /// `bisph shepard` prints it. `method`: `"geometric"` (paper 2, eq 9: from the walls alone,

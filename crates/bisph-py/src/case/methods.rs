@@ -103,7 +103,8 @@ impl Case {
     /// `threads`: the size of this simulation's own thread pool (all cores when `None`);
     /// results do not depend on it. `progress`: a callable given a `bisph.Progress` after
     /// every settling step, or `True` for progress lines on stderr. The GIL is released
-    /// while building.
+    /// while building; Ctrl-C stops settling after the step in progress and raises
+    /// KeyboardInterrupt (no simulation is returned).
     #[pyo3(signature = (threads = None, progress = None))]
     fn build(
         &self,
