@@ -684,27 +684,9 @@ impl<V: Vector> PairList<V> {
         radius: f64,
         factor: impl Fn(f64) -> f64 + Sync,
     ) {
-        self.queries = queries.len();
-        self.blocks
-            .resize_with(queries.len().div_ceil(Self::BLOCK), Default::default);
-        self.blocks
-            .par_iter_mut()
-            .zip(queries.par_chunks(Self::BLOCK))
-            .for_each(|(block, chunk)| {
-                block.start.clear();
-                block.index.clear();
-                block.offset.clear();
-                block.factor.clear();
-                block.start.push(0);
-                for &x in chunk {
-                    grid.for_each_neighbour(x, points, radius, |j, r_ij, r| {
-                        block.index.push(j as u32);
-                        block.offset.push(r_ij);
-                        block.factor.push(factor(r));
-                    });
-                    block.start.push(block.index.len() as u32);
-                }
-            });
+        self.fill(queries.len(), factor, |i, visit| {
+            grid.for_each_neighbour(queries[i], points, radius, visit)
+        });
     }
 
     /// Lists the neighbours within `radius` of every point of `points` among `points` from
@@ -718,9 +700,22 @@ impl<V: Vector> PairList<V> {
         radius: f64,
         factor: impl Fn(f64) -> f64 + Sync,
     ) {
-        self.queries = points.len();
+        self.fill(points.len(), factor, |i, visit| {
+            candidates.for_each_neighbour(i, points[i], points, radius, visit)
+        });
+    }
+
+    /// Fills the rows of `queries` queries, block by block in parallel: `neighbours(i, visit)`
+    /// calls `visit(j, r_ij, |r_ij|)` for each neighbour of query `i`, in the row's order.
+    fn fill(
+        &mut self,
+        queries: usize,
+        factor: impl Fn(f64) -> f64 + Sync,
+        neighbours: impl Fn(usize, &mut dyn FnMut(usize, V, f64)) + Sync,
+    ) {
+        self.queries = queries;
         self.blocks
-            .resize_with(points.len().div_ceil(Self::BLOCK), Default::default);
+            .resize_with(queries.div_ceil(Self::BLOCK), Default::default);
         self.blocks
             .par_iter_mut()
             .enumerate()
@@ -730,9 +725,8 @@ impl<V: Vector> PairList<V> {
                 block.offset.clear();
                 block.factor.clear();
                 block.start.push(0);
-                let first = b * Self::BLOCK;
-                for (i, &x) in points.iter().enumerate().skip(first).take(Self::BLOCK) {
-                    candidates.for_each_neighbour(i, x, points, radius, |j, r_ij, r| {
+                for i in b * Self::BLOCK..((b + 1) * Self::BLOCK).min(queries) {
+                    neighbours(i, &mut |j, r_ij, r| {
                         block.index.push(j as u32);
                         block.offset.push(r_ij);
                         block.factor.push(factor(r));

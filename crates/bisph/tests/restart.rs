@@ -416,11 +416,7 @@ fn sigterm_checkpoints_and_resumes() {
     while lines(&dir.join(case.per_step)) < 40 && start.elapsed() < Duration::from_secs(30) {
         std::thread::sleep(Duration::from_millis(1));
     }
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    terminate(&child);
     let out = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(10), "{stderr}");
@@ -452,11 +448,7 @@ fn sigterm_while_settling_stops_it() {
         .unwrap();
     // Settling to its tolerance takes tens of seconds of wall time; the signal comes first.
     std::thread::sleep(Duration::from_millis(500));
-    let status = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+    terminate(&child);
     let start = Instant::now();
     let out = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -465,6 +457,15 @@ fn sigterm_while_settling_stops_it() {
     assert!(stderr.starts_with("interrupted while settling"), "{stderr}");
     assert!(!dir.join("checkpoint.bin").exists());
     assert!(!dir.join("summary.json").exists());
+}
+
+/// Sends SIGTERM to `child`.
+fn terminate(child: &Child) {
+    let status = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
 }
 
 /// Damaged, truncated, foreign and missing checkpoints are refused with exit code 5 and a

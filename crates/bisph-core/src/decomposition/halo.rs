@@ -132,6 +132,31 @@ mod tests {
         period: Periodicity<V>,
     }
 
+    impl<V: Vector> Cloud<V> {
+        /// The points bisected into `parts` with `weights`, and each point's part.
+        fn split(&self, weights: &[f64], parts: usize) -> (Decomposition<V>, Vec<usize>) {
+            let d = bisect(
+                &self.positions,
+                weights,
+                &self.ids,
+                parts,
+                Bounds::everywhere(),
+            );
+            let owners = d.owners(&self.positions);
+            (d, owners)
+        }
+
+        /// The halos of `d` of the given `width`.
+        fn halos(
+            &self,
+            d: &Decomposition<V>,
+            owners: &[usize],
+            width: f64,
+        ) -> Vec<Vec<HaloEntry<V>>> {
+            select_halos(d, &self.positions, &self.ids, owners, width, &self.period)
+        }
+    }
+
     /// Random points in the box `[0, 1 + k)` along axis k, periodic along the axes in
     /// `periodic_axes`, with shuffled ids.
     fn cloud<V: Vector>(seed: u64, n: usize, periodic_axes: &[usize]) -> Cloud<V> {
@@ -203,23 +228,9 @@ mod tests {
         let weights = vec![1.0; cloud.positions.len()];
         let mut shifted_entries = 0;
         for parts in [1, 2, 3, 4, 7] {
-            let d = bisect(
-                &cloud.positions,
-                &weights,
-                &cloud.ids,
-                parts,
-                Bounds::everywhere(),
-            );
-            let owners = d.owners(&cloud.positions);
+            let (d, owners) = cloud.split(&weights, parts);
             for width in [0.05, 0.3] {
-                let halos = select_halos(
-                    &d,
-                    &cloud.positions,
-                    &cloud.ids,
-                    &owners,
-                    width,
-                    &cloud.period,
-                );
+                let halos = cloud.halos(&d, &owners, width);
                 let expected = brute_force_halos(&d, &cloud, &owners, width);
                 for (part, (halo, brute)) in halos.iter().zip(&expected).enumerate() {
                     let got: Vec<(GlobalId, [i8; 3])> =
@@ -268,22 +279,8 @@ mod tests {
             .map(|i| 1.0 + (i % 3) as f64)
             .collect();
         for parts in [2, 3, 5] {
-            let d = bisect(
-                &cloud.positions,
-                &weights,
-                &cloud.ids,
-                parts,
-                Bounds::everywhere(),
-            );
-            let owners = d.owners(&cloud.positions);
-            let halos = select_halos(
-                &d,
-                &cloud.positions,
-                &cloud.ids,
-                &owners,
-                width,
-                &cloud.period,
-            );
+            let (d, owners) = cloud.split(&weights, parts);
+            let halos = cloud.halos(&d, &owners, width);
             for (i, &xi) in cloud.positions.iter().enumerate() {
                 for (j, &xj) in cloud.positions.iter().enumerate() {
                     let raw = xj - xi;

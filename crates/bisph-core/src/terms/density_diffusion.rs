@@ -56,8 +56,11 @@ impl<V: Vector> DensityDiffusion<V> {
         volume_j: f64,
     ) -> f64 {
         // excess = -rho~_ij = (rho_j - rho_i) - (rho_j^H - rho_i^H).
-        let factor = self.eos.hydrostatic_density_factor(0.5 * (rho_i + rho_j));
-        let excess = (rho_j - rho_i) - self.hydrostatic_gradient.dot(r_ij) * factor;
+        let mut hydrostatic = self.hydrostatic_gradient.dot(r_ij);
+        if hydrostatic != 0.0 {
+            hydrostatic *= self.eos.hydrostatic_density_factor(0.5 * (rho_i + rho_j));
+        }
+        let excess = (rho_j - rho_i) - hydrostatic;
         match self.form {
             DiffusionForm::Laplacian => -2.0 * self.scale * excess * gradient_factor * volume_j,
             DiffusionForm::Riemann(eos) => {

@@ -748,12 +748,11 @@ mod signed_distance_tests {
         Walls::new(e, vec![Body::fixed("walls")], 0.1)
     }
 
-    /// A tank with a 90-degree wedge on its floor (convex and concave corners): the sign
-    /// agrees with the winding number and the magnitude with the distance to the polygon.
-    #[test]
-    fn signed_distance_matches_the_polygon_2d() {
+    /// A tank 2.2 m wide with a 90-degree wedge on its floor (convex and concave corners),
+    /// open at the top: its polyline from the top of the left wall to that of the right one.
+    fn wedge_tank() -> [DVec2; 7] {
         let s = 0.5f64.sqrt() * 0.25;
-        let tank = [
+        [
             DVec2::new(0.0, 1.0),
             DVec2::new(0.0, 0.0),
             DVec2::new(0.85, 0.0),
@@ -761,7 +760,26 @@ mod signed_distance_tests {
             DVec2::new(0.85 + 2.0 * s, 0.0),
             DVec2::new(2.2, 0.0),
             DVec2::new(2.2, 1.0),
-        ];
+        ]
+    }
+
+    /// Distance from `x` to the polyline through `points`.
+    fn distance_to_polyline(x: DVec2, points: &[DVec2]) -> f64 {
+        points
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (w[0], w[1]);
+                let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                (x - a - (b - a) * t).length()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A tank with a 90-degree wedge on its floor (convex and concave corners): the sign
+    /// agrees with the winding number and the magnitude with the distance to the polygon.
+    #[test]
+    fn signed_distance_matches_the_polygon_2d() {
+        let tank = wedge_tank();
         // The tank as three polylines, as a case lists them (elements of varying length).
         let walls = walls_2d(
             &[
@@ -784,13 +802,7 @@ mod signed_distance_tests {
                     continue;
                 };
                 let inside = winding_number(x, &closed[..closed.len() - 1]) != 0;
-                let exact = (0..tank.len() - 1)
-                    .map(|m| {
-                        let (a, b) = (tank[m], tank[m + 1]);
-                        let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
-                        (x - a - (b - a) * t).length()
-                    })
-                    .fold(f64::INFINITY, f64::min);
+                let exact = distance_to_polyline(x, &tank);
                 assert!((d.abs() - exact).abs() < 1e-12, "{x}: {d} vs {exact}");
                 if exact > 1e-12 {
                     assert_eq!(d > 0.0, !inside, "{x}: {d}");
@@ -820,16 +832,7 @@ mod signed_distance_tests {
     /// the wedge's convex corners (where the nearest element centre can face away) as well.
     #[test]
     fn count_behind_counts_the_points_outside() {
-        let s = 0.5f64.sqrt() * 0.25;
-        let tank = [
-            DVec2::new(0.0, 1.0),
-            DVec2::new(0.0, 0.0),
-            DVec2::new(0.85, 0.0),
-            DVec2::new(0.85 + s, s),
-            DVec2::new(0.85 + 2.0 * s, 0.0),
-            DVec2::new(2.2, 0.0),
-            DVec2::new(2.2, 1.0),
-        ];
+        let tank = wedge_tank();
         // Elements as long as the support: the nearest centre is a poor guide at corners.
         let walls = walls_2d(&[(&tank, false)], 0.1);
         let radius = 0.1;
@@ -839,14 +842,7 @@ mod signed_distance_tests {
             .collect();
         let outside = points
             .iter()
-            .filter(|&&x| {
-                let near = (0..tank.len() - 1).any(|m| {
-                    let (a, b) = (tank[m], tank[m + 1]);
-                    let t = ((x - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
-                    (x - a - (b - a) * t).length() < radius
-                });
-                near && winding_number(x, &tank) == 0
-            })
+            .filter(|&&x| distance_to_polyline(x, &tank) < radius && winding_number(x, &tank) == 0)
             .count();
         assert!(outside > 500, "{outside}");
         assert_eq!(walls.count_behind(&points, radius), outside);
