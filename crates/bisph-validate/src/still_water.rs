@@ -18,6 +18,7 @@ use bisph_core::{Simulation, Vector};
 use bisph_io::case::{build_simulation, parse_case, CaseDim};
 use bisph_io::formats::plot::line_plot_png as plot;
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Gravity [m/s^2] and density [kg/m^3] of every tank.
@@ -306,14 +307,29 @@ impl ValidationCase for StillWater {
             name: self.name().into(),
             ..Default::default()
         };
+        // The runs are independent and small, so they share the cores run by run rather than
+        // step by step; each run's results do not depend on the thread count.
+        let jobs: Vec<(usize, usize)> = TANKS
+            .iter()
+            .enumerate()
+            .flat_map(|(k, tank)| (0..tank.models.len()).map(move |m| (k, m)))
+            .collect();
+        let mut runs = jobs
+            .par_iter()
+            .map(|&(k, m)| {
+                let (tank, model) = (&TANKS[k], &TANKS[k].models[m].0);
+                match tank.dim {
+                    2 => run_tank::<DVec2>(tank, model, quick),
+                    _ => run_tank::<DVec3>(tank, model, quick),
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter();
         for (k, tank) in TANKS.iter().enumerate() {
             let end = if quick { tank.quick.1 } else { tank.full.1 };
             let mut kinetic_series = Vec::new();
             for (model, known_failures, limitation) in tank.models {
-                let run = match tank.dim {
-                    2 => run_tank::<DVec2>(tank, model, quick)?,
-                    _ => run_tank::<DVec3>(tank, model, quick)?,
-                };
+                let run = runs.next().expect("one run per tank and model");
                 let label = format!("{}, {}", tank.name, model.name);
                 report.notes.push(format!(
                     "{label}: {}; peak speed {:.3e} sqrt(gH); {} particles behind walls{}",
