@@ -247,15 +247,61 @@ fn a_walls_block_fills_a_3d_tank_around_an_stl_obstacle() {
 
 #[test]
 fn a_walls_block_leaves_out_an_obstacle_standing_on_the_floor_3d() {
-    // A box obstacle without a bottom of its own (open towards the floor): the points inside
-    // meet the tank's floor going down, but the obstacle's top going up. 20 x 20 x 10 cells
-    // below the level, minus the 10 x 10 x 7 inside the obstacle.
+    // A closed box obstacle on the floor: the points inside meet its bottom going down, which
+    // faces up. 20 x 20 x 10 cells below the level, minus the 10 x 10 x 7 inside the obstacle.
     let case = format!(
         "{TANK_3D}[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [2.0, 2.0, 2.0]\nopen = [\"+z\"]\n\
-         [[wall]]\nshape = \"box\"\nmin = [0.5, 0.5, 0.0]\nmax = [1.5, 1.5, 0.7]\nopen = [\"-z\"]\nfluid = \"outside\"\n\
+         [[wall]]\nshape = \"box\"\nmin = [0.5, 0.5, 0.0]\nmax = [1.5, 1.5, 0.7]\nfluid = \"outside\"\n\
          [[fluid_block]]\nshape = \"walls\"\nlevel = 1.0\n"
     );
     assert_eq!(fluid_particles("fill-3d-floor-obstacle", &case), 4000 - 700);
+}
+
+#[test]
+fn an_obstacle_open_towards_the_floor_it_stands_on_is_refused() {
+    // The floor would run on under the obstacle: the walls would not bound the water.
+    let obstacle = |open: &str, min_z: f64| {
+        format!(
+            "{TANK_3D}[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [2.0, 2.0, 2.0]\nopen = [\"+z\"]\n\
+             [[wall]]\nshape = \"box\"\nmin = [0.5, 0.5, {min_z}]\nmax = [1.5, 1.5, 0.7]\nopen = [{open}]\nfluid = \"outside\"\n\
+             [[fluid_block]]\nshape = \"walls\"\nlevel = 1.0\n"
+        )
+    };
+    refused(
+        "open-on-floor-3d",
+        &obstacle("\"-z\"", 0.0),
+        &[
+            "key `wall[1].open`",
+            "the open face \"-z\" lies on wall[0]",
+            "remove \"-z\" from open",
+        ],
+    );
+    // The same face open above the floor is not on a wall (the water flows under the box).
+    assert!(fluid_particles("open-above-floor-3d", &obstacle("\"-z\"", 0.05)) > 0);
+    // A 2-D box obstacle open towards the floor, and a cylinder whose open end stands on it.
+    let case = format!(
+        "{TANK_2D}{BOX_WALL_2D}open = [\"+y\"]\n\
+         [[wall]]\nshape = \"box\"\nmin = [0.4, 0.0]\nmax = [0.6, 0.2]\nopen = [\"-y\"]\nfluid = \"outside\"\n\
+         [[fluid_block]]\nshape = \"walls\"\nlevel = 0.5\n"
+    );
+    refused(
+        "open-on-floor-2d",
+        &case,
+        &["key `wall[1].open`", "the open face \"-y\" lies on wall[0]"],
+    );
+    let case = format!(
+        "{TANK_3D}[[wall]]\nshape = \"box\"\nmin = [0.0, 0.0, 0.0]\nmax = [2.0, 2.0, 2.0]\nopen = [\"+z\"]\n\
+         [[wall]]\nshape = \"cylinder\"\nstart = [1.0, 1.0, 0.0]\nend = [1.0, 1.0, 0.5]\nradius = 0.3\nopen = [\"start\"]\n\
+         [[fluid_block]]\nshape = \"walls\"\nlevel = 1.0\n"
+    );
+    refused(
+        "open-cylinder-on-floor-3d",
+        &case,
+        &[
+            "key `wall[1].open`",
+            "the open end \"start\" lies on wall[0]",
+        ],
+    );
 }
 
 #[test]

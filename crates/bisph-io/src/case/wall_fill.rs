@@ -133,7 +133,7 @@ fn facet<V: CaseDim>(s: &ElementShape<V>) -> Facet {
 /// `true` when `x` lies in the water the walls hold: the first facet met straight down faces
 /// down (out of the fluid: a floor), and straight up the walls are open or the first facet met
 /// faces up (a lid). A point inside an obstacle meets its bottom going down, or, where the
-/// obstacle stands on the floor without a bottom of its own, its top going up, which faces down.
+/// obstacle is open at the bottom, its top going up, which faces down.
 fn above_a_floor(facets: &[Facet], x: DVec3, down: DVec3) -> bool {
     first_facing(facets, x, down).is_some_and(|facing| facing > 0.0)
         && first_facing(facets, x, -down).is_none_or(|facing| facing > 0.0)
