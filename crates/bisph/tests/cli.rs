@@ -1071,3 +1071,28 @@ fn bench_runs_the_wall_bounded_cases_with_their_own_schemes() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("2-D only"));
 }
+
+#[test]
+fn several_processes_of_a_parallel_launcher_are_refused() {
+    let with = |name: &str, value: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_bisph"))
+            .args(["validate", "--list"])
+            .env(name, value)
+            .output()
+            .unwrap()
+    };
+    for name in ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"] {
+        let o = with(name, "4");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.starts_with("error: started as one of 4 processes")
+                && err.contains(&format!("{name} = 4"))
+                && err.contains("-np 1"),
+            "{name}: {err}"
+        );
+        assert!(o.stdout.is_empty(), "{name}: something ran");
+        // One process of a launcher runs as usual.
+        assert!(with(name, "1").status.success(), "{name} = 1 refused");
+    }
+}
