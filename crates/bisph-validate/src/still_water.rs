@@ -132,7 +132,7 @@ const TANKS: [Tank; 4] = [
         bottom: [2.0, 0.5, 0.0],
         // The lattice at dx = 0.55/5 leaves 0.03 m of the tank's 3.22 m length and 0.01 m of
         // its 1 m width unfilled, and cuts 0.22 m x 0.55 m x 0.22 m out around the
-        // 0.161 m x 0.403 m x 0.161 m obstacle: it holds 0.537 m of water, not 0.55 m.
+        // 0.161 m x 0.403 m x 0.161 m obstacle: it holds 0.534 m of water, not 0.55 m.
         floor: Some(Floor {
             area: 3.22,
             displaced: (0.8245 - 0.6635) * (0.6985 - 0.2955) * 0.161,

@@ -1,8 +1,8 @@
 //! Geometry checked before a run: every fluid particle on or in front of the walls (on the
 //! side their normals point away from), closed walls drawn the right way round,
 //! 2-D wall polygons that do not cross themselves, no open box face or cylinder end lying on
-//! another wall. Each mistake is a [`GeometryError`] naming
-//! the block or wall, a position and what was expected.
+//! another wall. Each mistake is a [`GeometryError`] naming the block or wall, a position and
+//! what was expected.
 
 use crate::case::build::Layout;
 use crate::case::error::CaseError;
@@ -101,8 +101,9 @@ fn check_self_intersections(loaded: &LoadedCase) -> Result<(), CaseError> {
 /// without a bottom of its own. The floor then runs on under the obstacle, so the walls no
 /// longer bound the water: the geometric Shepard factor (paper 2, eq 8) near the obstacle's
 /// foot counts the floor inside the obstacle (up to 0.1 too low beside the SPHERIC test 2
-/// obstacle at `h = 0.22 m`) and the wall terms push on water that is not there. Closed, the obstacle's bottom lies on the floor with the opposite normal and cancels
-/// it where they overlap.
+/// obstacle at `h = 0.22 m`) and the wall terms push on water that is not there. Closed, the
+/// obstacle's bottom lies on the floor with the opposite normal and cancels it where they
+/// overlap.
 fn check_open_faces<V: Vector>(
     loaded: &LoadedCase,
     sim: &Simulation<V>,
