@@ -163,16 +163,15 @@ fn one_process() -> Result<(), (u8, String)> {
         let Ok(value) = std::env::var(name) else {
             continue;
         };
-        if value.trim().parse::<u64>().is_ok_and(|n| n > 1) {
+        let count = value.trim();
+        if count.parse::<u64>().is_ok_and(|n| n > 1) {
             return Err((
                 1,
                 format!(
-                    "started as one of {} processes ({name} = {}): each would run the whole case \
-                     and write the same outputs; expected one process (bisph uses every core \
-                     through threads, `--threads N`): start it without the launcher, or with \
-                     -np 1",
-                    value.trim(),
-                    value.trim()
+                    "started as one of {count} processes ({name} = {count}): each would run the \
+                     whole case and write the same outputs; expected one process (bisph uses \
+                     every core through threads, `--threads N`): start it without the \
+                     launcher, or with -np 1"
                 ),
             ));
         }
