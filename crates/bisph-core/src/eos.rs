@@ -47,7 +47,7 @@ impl Eos {
         match *self {
             Eos::Linear { rho0, c0, p0 } => p0 + c0 * c0 * (rho - rho0),
             Eos::Tait { rho0, c0, p0, xi } => {
-                p0 + rho0 * c0 * c0 / xi * ((rho / rho0).powf(xi) - 1.0)
+                p0 + rho0 * c0 * c0 / xi * (power(rho / rho0, xi) - 1.0)
             }
         }
     }
@@ -108,7 +108,7 @@ impl Eos {
     pub fn hydrostatic_density_factor(&self, rho: f64) -> f64 {
         match *self {
             Eos::Linear { rho0, .. } => rho / rho0,
-            Eos::Tait { rho0, xi, .. } => (rho / rho0).powf(2.0 - xi),
+            Eos::Tait { rho0, xi, .. } => power(rho / rho0, 2.0 - xi),
         }
     }
 
@@ -116,9 +116,17 @@ impl Eos {
     pub fn sound_speed(&self, rho: f64) -> f64 {
         match *self {
             Eos::Linear { c0, .. } => c0,
-            Eos::Tait { rho0, c0, xi, .. } => c0 * (rho / rho0).powf(0.5 * (xi - 1.0)),
+            Eos::Tait { rho0, c0, xi, .. } => c0 * power(rho / rho0, 0.5 * (xi - 1.0)),
         }
     }
+}
+
+/// `x^e` for Tait's equation, kept out of line: `powf` is an intrinsic that the optimiser may
+/// evaluate ahead of the `match` selecting it, which made a linear equation of state pay for
+/// the power in every pair of the fluid sweep.
+#[inline(never)]
+fn power(x: f64, e: f64) -> f64 {
+    x.powf(e)
 }
 
 #[cfg(test)]
