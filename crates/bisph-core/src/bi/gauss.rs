@@ -17,32 +17,31 @@ use glam::{DVec2, DVec3};
 /// Gauss-Legendre abscissae of the 2-point rule on `[0, 1]` (weights 1/2 each).
 const GAUSS2: [f64; 2] = [0.211_324_865_405_187_1, 0.788_675_134_594_812_9];
 
-/// `int W dS` over the segment `a -> b` by 2-point Gauss-Legendre.
-pub fn segment(kernel: &Wendland, x: DVec2, a: DVec2, b: DVec2) -> f64 {
+/// The points and weights of the rule for the segment `a -> b` (2-point Gauss-Legendre,
+/// weights half the length), appended to `out`.
+pub fn segment_rule(a: DVec2, b: DVec2, out: &mut Vec<(DVec2, f64)>) {
     let d = b - a;
-    let sum: f64 = GAUSS2
-        .iter()
-        .map(|&t| kernel.value((a + d * t - x).length()))
-        .sum();
-    0.5 * d.length() * sum
+    let weight = 0.5 * d.length();
+    out.extend(GAUSS2.iter().map(|&t| (a + d * t, weight)));
 }
 
-/// `int W dS` over a planar polygon in 3-D (see the module documentation for the rule each
-/// corner count takes).
-pub fn polygon(kernel: &Wendland, x: DVec3, corners: &[DVec3]) -> f64 {
+/// The points and weights of the rule for a planar polygon in 3-D (see the module
+/// documentation for the rule each corner count takes), appended to `out`.
+pub fn polygon_rule(corners: &[DVec3], out: &mut Vec<(DVec3, f64)>) {
     match corners {
-        [a, b, c, d] => quadrilateral(kernel, x, [*a, *b, *c, *d]),
-        _ => (1..corners.len() - 1)
-            .map(|k| triangle(kernel, x, [corners[0], corners[k], corners[k + 1]]))
-            .sum(),
+        [a, b, c, d] => quadrilateral_rule([*a, *b, *c, *d], out),
+        _ => {
+            for k in 1..corners.len() - 1 {
+                triangle_rule([corners[0], corners[k], corners[k + 1]], out);
+            }
+        }
     }
 }
 
 /// 2 x 2 Gauss-Legendre on the bilinear map of the quadrilateral `c0 c1 c2 c3`,
-/// `y(s, t) = (1-s)(1-t) c0 + s(1-t) c1 + s t c2 + (1-s) t c3`, with the area element
-/// `|dy/ds x dy/dt|` at each point.
-fn quadrilateral(kernel: &Wendland, x: DVec3, c: [DVec3; 4]) -> f64 {
-    let mut sum = 0.0;
+/// `y(s, t) = (1-s)(1-t) c0 + s(1-t) c1 + s t c2 + (1-s) t c3`, each point weighted by a
+/// quarter of the area element `|dy/ds x dy/dt|` there.
+fn quadrilateral_rule(c: [DVec3; 4], out: &mut Vec<(DVec3, f64)>) {
     for &s in &GAUSS2 {
         for &t in &GAUSS2 {
             let y = c[0] * ((1.0 - s) * (1.0 - t))
@@ -51,20 +50,51 @@ fn quadrilateral(kernel: &Wendland, x: DVec3, c: [DVec3; 4]) -> f64 {
                 + c[3] * ((1.0 - s) * t);
             let ds = (c[1] - c[0]) * (1.0 - t) + (c[2] - c[3]) * t;
             let dt = (c[3] - c[0]) * (1.0 - s) + (c[2] - c[1]) * s;
-            sum += kernel.value((y - x).length()) * ds.cross(dt).length();
+            out.push((y, 0.25 * ds.cross(dt).length()));
         }
     }
-    0.25 * sum
 }
 
-/// The symmetric 3-point rule of degree 2 on the triangle `t`.
-fn triangle(kernel: &Wendland, x: DVec3, t: [DVec3; 3]) -> f64 {
-    let area = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
+/// The symmetric 3-point rule of degree 2 on the triangle `t` (weights a third of its area).
+fn triangle_rule(t: [DVec3; 3], out: &mut Vec<(DVec3, f64)>) {
+    let weight = 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length() / 3.0;
     let point = |a: DVec3, b: DVec3, c: DVec3| (a * 4.0 + b + c) / 6.0;
-    let sum = kernel.value((point(t[0], t[1], t[2]) - x).length())
-        + kernel.value((point(t[1], t[2], t[0]) - x).length())
-        + kernel.value((point(t[2], t[0], t[1]) - x).length());
-    area * sum / 3.0
+    out.push((point(t[0], t[1], t[2]), weight));
+    out.push((point(t[1], t[2], t[0]), weight));
+    out.push((point(t[2], t[0], t[1]), weight));
+}
+
+/// `sum_k w_k W(|y_k - x|)`: the integral by the rule with points `y_k` and weights `w_k`.
+#[inline(always)]
+pub fn integral<V: crate::dim::Vector>(
+    kernel: &Wendland,
+    x: V,
+    points: &[V],
+    weights: &[f64],
+) -> f64 {
+    points
+        .iter()
+        .zip(weights)
+        .map(|(&y, &w)| w * kernel.value((y - x).length()))
+        .sum()
+}
+
+/// `int W dS` over the segment `a -> b` by its rule ([`segment_rule`]).
+pub fn segment(kernel: &Wendland, x: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let mut rule = Vec::with_capacity(2);
+    segment_rule(a, b, &mut rule);
+    rule.iter()
+        .map(|&(y, w)| w * kernel.value((y - x).length()))
+        .sum()
+}
+
+/// `int W dS` over a planar polygon in 3-D by its rule ([`polygon_rule`]).
+pub fn polygon(kernel: &Wendland, x: DVec3, corners: &[DVec3]) -> f64 {
+    let mut rule = Vec::with_capacity(4);
+    polygon_rule(corners, &mut rule);
+    rule.iter()
+        .map(|&(y, w)| w * kernel.value((y - x).length()))
+        .sum()
 }
 
 #[cfg(test)]
@@ -136,8 +166,8 @@ mod tests {
         ];
         for x in [DVec3::new(0.02, 0.01, 0.03), DVec3::new(-0.05, 0.08, 0.02)] {
             let exact = DVec3::kernel_integral(&kernel, x, &quad, kernel.support);
-            let fan = triangle(&kernel, x, [quad[0], quad[1], quad[2]])
-                + triangle(&kernel, x, [quad[0], quad[2], quad[3]]);
+            let fan = polygon(&kernel, x, &[quad[0], quad[1], quad[2]])
+                + polygon(&kernel, x, &[quad[0], quad[2], quad[3]]);
             let bilinear = polygon(&kernel, x, &quad);
             let five = [
                 quad[0],

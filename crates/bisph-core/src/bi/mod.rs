@@ -62,8 +62,9 @@ pub trait ElementIntegrals: Vector {
     /// (at most the support `2h`) of `x` (paper 4, eq 3; paper 3, eq 9).
     fn kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64;
 
-    /// `int_S W(|y - x|) dS` over the whole element by a low-order Gauss rule ([`gauss`]).
-    fn gauss_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self]) -> f64;
+    /// The points and weights of the low-order Gauss rule for `int_S W(|y - x|) dS` over the
+    /// whole element ([`gauss`]), appended to `out`.
+    fn gauss_rule(corners: &[Self], out: &mut Vec<(Self, f64)>);
 
     /// `grad gamma_as`, the element's share of the gradient of the Shepard factor,
     /// `-n int_{S cap B(x, radius)} W dS` (paper 3, eq 9; paper 4, eq 3), pointing into the
@@ -146,16 +147,27 @@ pub fn kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V], radius
     }
 }
 
-/// [`ElementIntegrals::gauss_kernel_integral`] for any vector type.
-#[inline(always)]
-pub fn gauss_kernel_integral<V: Vector>(kernel: &Wendland, x: V, corners: &[V]) -> f64 {
-    match (
-        V::as_concrete(std::slice::from_ref(&x)),
-        V::as_concrete(corners),
-    ) {
-        (Concrete::Two(x), Concrete::Two(c)) => DVec2::gauss_kernel_integral(kernel, x[0], c),
-        (Concrete::Three(x), Concrete::Three(c)) => DVec3::gauss_kernel_integral(kernel, x[0], c),
-        _ => unreachable!("a point and its element's corners share one vector type"),
+/// [`ElementIntegrals::gauss_rule`] for any vector type: the points into `points`, the
+/// weights into `weights`.
+pub fn gauss_rule<V: Vector>(corners: &[V], points: &mut Vec<V>, weights: &mut Vec<f64>) {
+    let back = |xyz: [f64; 3]| V::from_slice(&xyz[..V::DIM]);
+    match V::as_concrete(corners) {
+        Concrete::Two(c) => {
+            let mut rule = Vec::new();
+            DVec2::gauss_rule(c, &mut rule);
+            for (y, w) in rule {
+                points.push(back([y.x, y.y, 0.0]));
+                weights.push(w);
+            }
+        }
+        Concrete::Three(c) => {
+            let mut rule = Vec::new();
+            DVec3::gauss_rule(c, &mut rule);
+            for (y, w) in rule {
+                points.push(back(y.to_array()));
+                weights.push(w);
+            }
+        }
     }
 }
 

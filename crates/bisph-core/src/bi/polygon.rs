@@ -274,8 +274,8 @@ impl ElementIntegrals for DVec3 {
     fn kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
         polar::kernel_integral(kernel, x, corners, radius)
     }
-    fn gauss_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self]) -> f64 {
-        super::gauss::polygon(kernel, x, corners)
+    fn gauss_rule(corners: &[Self], out: &mut Vec<(Self, f64)>) {
+        super::gauss::polygon_rule(corners, out)
     }
     fn polar_shepard(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
         polar::shepard(kernel, x, corners, normal)

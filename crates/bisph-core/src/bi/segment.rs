@@ -196,8 +196,8 @@ impl ElementIntegrals for DVec2 {
     fn kernel_integral(kernel: &Wendland, x: Self, corners: &[Self], radius: f64) -> f64 {
         segment_kernel_integral_from_length(kernel, x, corners[0], corners[1], radius)
     }
-    fn gauss_kernel_integral(kernel: &Wendland, x: Self, corners: &[Self]) -> f64 {
-        super::gauss::segment(kernel, x, corners[0], corners[1])
+    fn gauss_rule(corners: &[Self], out: &mut Vec<(Self, f64)>) {
+        super::gauss::segment_rule(corners[0], corners[1], out)
     }
     fn polar_shepard(kernel: &Wendland, x: Self, corners: &[Self], normal: Self) -> f64 {
         segment_shepard(kernel, x, corners[0], corners[1], normal)

@@ -54,8 +54,17 @@ pub struct BoundaryElements<V: Vector> {
     pub reference_corners: Vec<V>,
     /// Offsets into `reference_corners` (length = elements + 1).
     pub corner_start: Vec<u32>,
-    /// Current corner points (same layout as `reference_corners`).
+    /// Current corner points (same layout as `reference_corners`); placed by
+    /// [`Walls::move_to`], set from outside by [`BoundaryElements::set_corners`] (which keeps
+    /// the Gauss rules in step).
     pub corners: Vec<V>,
+    /// Points of each element's Gauss rule at its current place ([`crate::bi::gauss`]),
+    /// flattened: element `j` owns `gauss_points[gauss_start[j]..gauss_start[j + 1]]`.
+    gauss_points: Vec<V>,
+    /// Weights of those points.
+    gauss_weights: Vec<f64>,
+    /// Offsets into `gauss_points` (length = elements + 1).
+    gauss_start: Vec<u32>,
     /// Merged wall pieces and per-cell candidate lists for the geometric Shepard factor
     /// (empty until [`Walls::prepare_gamma`]; rebuilt whenever the walls are placed).
     pub gamma_cache: gamma_cache::GammaCache<V>,
@@ -95,6 +104,43 @@ impl<V: Vector> BoundaryElements<V> {
         self.reference_corners.extend_from_slice(corners);
         self.corners.extend_from_slice(corners);
         self.corner_start.push(self.reference_corners.len() as u32);
+        if self.gauss_start.is_empty() {
+            self.gauss_start.push(0);
+        }
+        crate::bi::gauss_rule(corners, &mut self.gauss_points, &mut self.gauss_weights);
+        self.gauss_start.push(self.gauss_points.len() as u32);
+    }
+
+    /// `int_{S_j} W(|y - x|) dS` over element `j` by its Gauss rule ([`crate::bi::gauss`]).
+    #[inline(always)]
+    pub fn gauss_integral(&self, kernel: &Wendland, x: V, j: usize) -> f64 {
+        let range = self.gauss_start[j] as usize..self.gauss_start[j + 1] as usize;
+        crate::bi::gauss::integral(
+            kernel,
+            x,
+            &self.gauss_points[range.clone()],
+            &self.gauss_weights[range],
+        )
+    }
+
+    /// Sets the current corner points (the layout of `reference_corners`) and the Gauss rules
+    /// that follow from them.
+    pub fn set_corners(&mut self, corners: &[V]) {
+        self.corners.clear();
+        self.corners.extend_from_slice(corners);
+        self.refresh_gauss_rules();
+    }
+
+    /// Recomputes the Gauss rules of every element from the current corners (after the
+    /// corners moved).
+    fn refresh_gauss_rules(&mut self) {
+        self.gauss_points.clear();
+        self.gauss_weights.clear();
+        for j in 0..self.len() {
+            let corners =
+                &self.corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize];
+            crate::bi::gauss_rule(corners, &mut self.gauss_points, &mut self.gauss_weights);
+        }
     }
 
     /// Corner points of element `j` in the reference configuration.
@@ -205,6 +251,7 @@ impl<V: Vector> Walls<V> {
         }
         self.place_stretching(true);
         self.wrap_elements();
+        self.elements.refresh_gauss_rules();
         self.grid.rebuild(&self.elements.centre);
         self.refresh_gamma();
     }
@@ -234,6 +281,7 @@ impl<V: Vector> Walls<V> {
             return;
         }
         let e = &mut self.elements;
+        let mut moved = false;
         for j in 0..e.len() {
             let shift = self.periodicity.wrap(e.centre[j]) - e.centre[j];
             if shift != V::ZERO {
@@ -241,7 +289,11 @@ impl<V: Vector> Walls<V> {
                 for m in e.corner_start[j] as usize..e.corner_start[j + 1] as usize {
                     e.corners[m] += shift;
                 }
+                moved = true;
             }
+        }
+        if moved {
+            e.refresh_gauss_rules();
         }
     }
 
@@ -891,5 +943,69 @@ mod signed_distance_tests {
             }
         }
         assert!(n > 5000, "{n}");
+    }
+}
+
+#[cfg(test)]
+mod gauss_rule_tests {
+    use super::*;
+    use crate::bodies::PrescribedMotion;
+    use crate::geometry::{box_elements_3d, triangulate};
+
+    /// Each element's stored Gauss rule follows its corners: at the start, after a rotating
+    /// body is placed, and after the corners are set from outside (a restored checkpoint),
+    /// the stored rule gives the bits of the rule built from the current corners.
+    #[test]
+    fn gauss_rules_follow_moving_and_restored_corners() {
+        let mut e = BoundaryElements::default();
+        let mut shapes = box_elements_3d(DVec3::ZERO, DVec3::ONE, &[], 0.25);
+        let quads = shapes.len();
+        shapes.extend(triangulate(box_elements_3d(
+            DVec3::splat(2.0),
+            DVec3::splat(2.5),
+            &[],
+            0.25,
+        )));
+        for (k, s) in shapes.iter().enumerate() {
+            e.push(s.centre, s.normal, s.area, (k >= quads) as u32, &s.corners);
+        }
+        let spin = PrescribedMotion {
+            velocity: DVec3::new(0.3, 0.0, 0.1),
+            amplitude: DVec3::ZERO,
+            frequency: 0.0,
+            phase: 0.0,
+            axis: DVec3::new(0.0, 0.6, 0.8),
+            angular_velocity: 2.0,
+            angular_amplitude: 0.0,
+            angular_frequency: 0.0,
+        };
+        let bodies = vec![
+            Body::fixed("walls"),
+            Body {
+                name: "spinner".into(),
+                centre: DVec3::splat(2.25),
+                motion: Motion::Prescribed(spin),
+            },
+        ];
+        let mut walls = Walls::new(e, bodies, 0.5);
+        let kernel = Wendland::new(0.3, 3);
+        let agree = |walls: &Walls<DVec3>| {
+            let e = &walls.elements;
+            for j in 0..e.len() {
+                let x = e.centre[j] + e.normal[j] * -0.1 + DVec3::new(0.05, -0.03, 0.02);
+                let stored = e.gauss_integral(&kernel, x, j);
+                let direct = crate::bi::gauss::polygon(&kernel, x, e.current_corners(j));
+                assert_eq!(stored, direct, "element {j}");
+                assert!(stored > 0.0);
+            }
+        };
+        agree(&walls);
+        walls.move_to(0.7);
+        assert_ne!(walls.elements.corners, walls.elements.reference_corners);
+        agree(&walls);
+        let moved = walls.elements.corners.clone();
+        walls.move_to(0.0);
+        walls.elements.set_corners(&moved);
+        agree(&walls);
     }
 }

@@ -127,9 +127,7 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
                     elements.current_corners(k),
                     kernel.support,
                 ),
-                BoundaryQuadrature::Gauss => {
-                    crate::bi::gauss_kernel_integral(kernel, x, elements.current_corners(k))
-                }
+                BoundaryQuadrature::Gauss => elements.gauss_integral(kernel, x, k),
             };
             let n = elements.normal[k];
             pressure_gradient += n * ((elements.pressure[k] + p) * ws);

@@ -584,7 +584,7 @@ impl<V: Vector> SimState<V> {
         e.reach.clone_from(&self.reach);
         e.max_reach = self.max_reach;
         e.pressure.clone_from(&self.pressure);
-        e.corners.clone_from(&self.corners);
+        e.set_corners(&self.corners);
     }
 
     /// The pistons' and free bodies' states into `sim`.
