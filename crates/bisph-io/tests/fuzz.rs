@@ -433,6 +433,7 @@ fn checkpoint_bytes_of(text: &str, overrides: &[String]) -> (Vec<u8>, bisph_io::
         },
         history: vec![[0.0; checkpoint::ENERGY_COLUMNS]; 3],
         probe_history: vec![vec![0.0, 1.0]; 3],
+        settling: None,
     };
     (checkpoint::encode(&c), loaded)
 }

@@ -278,7 +278,13 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
                 out.display()
             ),
         )),
-        Err(e @ RunError::Interrupted { .. }) => Err((
+        Err(
+            e @ (RunError::Interrupted { .. }
+            | RunError::SettlingInterrupted {
+                checkpoint: Some(_),
+                ..
+            }),
+        ) => Err((
             e.exit_code(),
             format!("{e}; continue with: bisph run --resume {}", out.display()),
         )),

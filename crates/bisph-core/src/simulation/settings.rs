@@ -80,3 +80,18 @@ pub struct SettleReport {
     /// Wall-clock seconds.
     pub wall_seconds: f64,
 }
+
+impl SettleReport {
+    /// The report before the first settling step.
+    pub fn starting() -> Self {
+        SettleReport {
+            outcome: SettleOutcome::TimedOut,
+            steps: 0,
+            time: 0.0,
+            max_speed: 0.0,
+            max_acceleration: 0.0,
+            max_displacement: 0.0,
+            wall_seconds: 0.0,
+        }
+    }
+}

@@ -27,24 +27,33 @@ use std::time::Instant;
 impl<V: Vector> Simulation<V> {
     /// Settles the fluid (see the module documentation) with the walls held at their
     /// `t = 0` place, then restarts the clock and the energy books at the state reached.
-    /// `on_step` sees the report after every settling step; returning `Break` stops settling
-    /// there ([`SettleOutcome::Interrupted`]).
+    /// `on_step` sees the simulation and the report after every settling step; returning
+    /// `Break` stops settling there ([`SettleOutcome::Interrupted`]).
     pub fn settle(
         &mut self,
         params: &SettleParams,
-        on_step: &mut dyn FnMut(&SettleReport) -> ControlFlow<()>,
+        on_step: &mut dyn FnMut(&Self, &SettleReport) -> ControlFlow<()>,
+    ) -> Result<SettleReport, SimError> {
+        let original = self.fluid.clone();
+        self.settle_from(params, &original, SettleReport::starting(), on_step)
+    }
+
+    /// [`Simulation::settle`] continued from a settling state: the simulation holds the state
+    /// reached (restored from a checkpoint taken in `on_step`), `original` is the fluid as it
+    /// started settling and `so_far` the report at that state. Continuing gives the bits of
+    /// settling without the break.
+    pub fn settle_from(
+        &mut self,
+        params: &SettleParams,
+        original: &Fluid<V>,
+        so_far: SettleReport,
+        on_step: &mut dyn FnMut(&Self, &SettleReport) -> ControlFlow<()>,
     ) -> Result<SettleReport, SimError> {
         let clock = Instant::now();
-        let original = self.fluid.clone();
-        let start = positions_by_id(&self.fluid);
+        let start = positions_by_id(original);
         let mut report = SettleReport {
             outcome: SettleOutcome::TimedOut,
-            steps: 0,
-            time: 0.0,
-            max_speed: 0.0,
-            max_acceleration: 0.0,
-            max_displacement: 0.0,
-            wall_seconds: 0.0,
+            ..so_far
         };
         let u_tol = params.speed_tolerance * params.speed_scale;
         let a_tol = params.acceleration_tolerance * params.speed_scale * params.damping;
@@ -60,7 +69,8 @@ impl<V: Vector> Simulation<V> {
             report.max_speed = self.max_speed();
             report.max_acceleration = self.max_acceleration();
             report.max_displacement = max_displacement(&self.fluid, &start);
-            if on_step(&report).is_break() {
+            report.wall_seconds = so_far.wall_seconds + clock.elapsed().as_secs_f64();
+            if on_step(self, &report).is_break() {
                 report.outcome = SettleOutcome::Interrupted;
                 break;
             }
@@ -74,10 +84,10 @@ impl<V: Vector> Simulation<V> {
             }
         }
         if report.outcome == SettleOutcome::NotAtRest {
-            self.fluid = original;
+            self.fluid = original.clone();
         }
         self.restart_at_rest();
-        report.wall_seconds = clock.elapsed().as_secs_f64();
+        report.wall_seconds = so_far.wall_seconds + clock.elapsed().as_secs_f64();
         Ok(report)
     }
 

@@ -15,20 +15,24 @@
 //! a damaged or hostile file cannot make the reader allocate more than the file's own size.
 //!
 //! What is saved: the fluid arrays in their current memory order (the run reorders particles
-//! by cell, and sums run in memory order, so the order is part of the state), the wall elements'
-//! moving geometry, velocities and pressures, the pistons and free rigid bodies (attitude,
-//! position, velocities and the accelerations the integrator keeps), the integrator history (rates of the
-//! last evaluation and of the step before, from which the midpoint scheme extrapolates its first
-//! guess, and which Verlet uses as its first kick), the positions the explicit scheme's Verlet
-//! list was built at (so the same list is rebuilt and kept for the same steps), the energy accumulators (wall work, viscous dissipation, forcing work), the flux
-//! controller's memory and driving force, and the run loop's counters (next output times, frames,
-//! CSV lengths, free bodies' CSV lengths, plot histories). The static parts (masses are saved too; reference geometry,
-//! configuration) are rebuilt from the case text stored in the checkpoint.
+//! by cell, and sums run in memory order, so the order is part of the state), the wall
+//! elements' moving geometry, velocities and pressures, the pistons and free rigid bodies
+//! (attitude, position, velocities and the accelerations the integrator keeps), the integrator
+//! history (rates of the last evaluation and of the step before, from which the midpoint
+//! scheme extrapolates its first guess, and which Verlet uses as its first kick), the
+//! positions the explicit scheme's Verlet list was built at (so the same list is rebuilt and
+//! kept for the same steps), the energy accumulators (wall work, viscous dissipation, forcing
+//! work), the flux controller's memory and driving force, and the run loop's counters (next
+//! output times, frames, CSV lengths, free bodies' CSV lengths, plot histories); a checkpoint
+//! taken while settling before `t = 0` saves the settling report instead of the run's
+//! counters. The static parts (reference geometry, configuration; masses are saved too) are
+//! rebuilt from the case text stored in the checkpoint.
 
 use crate::formats::files::OutputError;
 use bisph_core::bodies::{FreeBody, Motion};
 use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
+use bisph_core::simulation::SettleReport;
 use bisph_core::{Simulation, Vector};
 use glam::{DQuat, DVec3};
 use std::path::{Path, PathBuf};
@@ -36,14 +40,16 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (6: the positions the explicit scheme's Verlet list was built at; 5: the midpoint first
+/// (7: a settling stage part-way; 6: the positions the explicit scheme's Verlet list was
+/// built at; 5: the midpoint first
 /// guess's earlier rates and step; 4: free rigid bodies and their CSV lengths; 3: without
 /// them).
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 /// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
 /// by it resumes with the first guess of a fresh start (last rates) for its first two steps;
 /// format 5 is format 6 without the Verlet list's build positions, so an explicit run with a
-/// skin written by it builds its list afresh at its first step.
+/// skin written by it builds its list afresh at its first step; format 6 is format 7 without
+/// the settling stage (it was never written before `t = 0`).
 pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -708,6 +714,9 @@ pub struct Checkpoint<V: Vector> {
     pub history: Vec<[f64; ENERGY_COLUMNS]>,
     /// Rows of `probes.csv` so far (for the plots).
     pub probe_history: Vec<Vec<f64>>,
+    /// Written while settling before `t = 0`: the settling report at the state saved (the run
+    /// counters and histories are then empty).
+    pub settling: Option<SettleReport>,
 }
 
 struct Writer(Vec<u8>);
@@ -916,6 +925,22 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     for row in &c.probe_history {
         w.f64s(row);
     }
+    if format >= 7 {
+        match &c.settling {
+            None => w.u32(0),
+            Some(s) => {
+                w.u32(1);
+                w.u64(s.steps);
+                w.f64s(&[
+                    s.time,
+                    s.max_speed,
+                    s.max_acceleration,
+                    s.max_displacement,
+                    s.wall_seconds,
+                ]);
+            }
+        }
+    }
     w.0
 }
 
@@ -1031,6 +1056,26 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
     for _ in 0..n {
         probe_history.push(r.f64s()?);
     }
+    let settling = match (format >= 7).then(|| r.u32()).transpose()? {
+        None | Some(0) => None,
+        Some(1) => {
+            let steps = r.u64()?;
+            let v = r.f64s()?;
+            let [time, max_speed, max_acceleration, max_displacement, wall_seconds] = v[..] else {
+                return Err(format!("{} settling values, expected 5", v.len()));
+            };
+            Some(SettleReport {
+                steps,
+                time,
+                max_speed,
+                max_acceleration,
+                max_displacement,
+                wall_seconds,
+                ..SettleReport::starting()
+            })
+        }
+        Some(flag) => return Err(format!("settling flag {flag}, expected 0 or 1")),
+    };
     if r.at != bytes.len() {
         return Err(format!(
             "{} bytes left over after the payload",
@@ -1044,6 +1089,7 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         run,
         history,
         probe_history,
+        settling,
     })
 }
 
@@ -1199,6 +1245,15 @@ mod tests {
         c.sim.flux_history.last = 0.9;
         c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0]];
         c.probe_history = vec![vec![0.0, 1.0], vec![0.1, 2.0]];
+        c.settling = Some(SettleReport {
+            steps: 321,
+            time: 1.5,
+            max_speed: 0.02,
+            max_acceleration: 0.3,
+            max_displacement: 0.004,
+            wall_seconds: 12.0,
+            ..SettleReport::starting()
+        });
         c
     }
 
@@ -1213,6 +1268,7 @@ mod tests {
         assert_eq!(back.sim.pistons, c.sim.pistons);
         assert_eq!(back.sim.free_bodies, c.sim.free_bodies);
         assert_eq!(back.run.body_csv_lengths, vec![1234]);
+        assert_eq!(back.settling, c.settling);
         let mut b = FreeBody::new(1.0, glam::DMat3::IDENTITY, DQuat::IDENTITY, DVec3::ZERO);
         set_free_body_values(&mut b, &c.sim.free_bodies[0].1);
         assert_eq!(free_body_values(&b), c.sim.free_bodies[0].1);
@@ -1227,14 +1283,24 @@ mod tests {
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads formats 4 to 6"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 7"),
             "{e}"
         );
     }
 
     #[test]
+    fn format_6_reads_without_a_settling_stage() {
+        let mut c = sample();
+        let back = decode::<DVec2>(Path::new("v6.bin"), &encode_format(&c, 6)).unwrap();
+        assert_eq!(back.settling, None);
+        c.settling = None;
+        assert_eq!(encode(&back), encode(&c));
+    }
+
+    #[test]
     fn format_5_reads_without_the_neighbour_list() {
         let mut c = sample();
+        c.settling = None;
         c.sim.neighbour_origin = c.sim.fluid.position.clone();
         let back = decode::<DVec2>(Path::new("v5.bin"), &encode_format(&c, 5)).unwrap();
         assert!(back.sim.neighbour_origin.is_empty());
@@ -1245,6 +1311,7 @@ mod tests {
     #[test]
     fn format_4_reads_without_the_earlier_rates() {
         let mut c = sample();
+        c.settling = None;
         c.sim.earlier_dt = 1e-3;
         c.sim.fluid.earlier_acceleration = c.sim.fluid.acceleration.clone();
         c.sim.fluid.earlier_density_rate = c.sim.fluid.density_rate.clone();

@@ -29,10 +29,12 @@ pub enum RunError {
         /// The checkpoint to resume from.
         checkpoint: PathBuf,
     },
-    /// Settling was interrupted by a signal, before `t = 0` (nothing to resume from).
+    /// Settling was interrupted by a signal, before `t = 0`.
     SettlingInterrupted {
         /// Settling time reached [s].
         time: f64,
+        /// The checkpoint written to resume from (none when `checkpoint.on_signal` is off).
+        checkpoint: Option<PathBuf>,
     },
     /// A divergence watch tripped (outputs up to the last good state are kept;
     /// `diagnostics.json` says what happened).
@@ -71,7 +73,18 @@ impl std::fmt::Display for RunError {
                 "interrupted at step {step} (t = {time:.6e} s); checkpoint written to {}",
                 checkpoint.display()
             ),
-            RunError::SettlingInterrupted { time } => write!(
+            RunError::SettlingInterrupted {
+                time,
+                checkpoint: Some(checkpoint),
+            } => write!(
+                f,
+                "interrupted while settling (settling time {time:.3} s), before the run started; checkpoint written to {}",
+                checkpoint.display()
+            ),
+            RunError::SettlingInterrupted {
+                time,
+                checkpoint: None,
+            } => write!(
                 f,
                 "interrupted while settling (settling time {time:.3} s), before the run started: nothing to resume, run it again"
             ),

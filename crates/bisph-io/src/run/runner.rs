@@ -4,7 +4,7 @@ use crate::case::build::build_simulation_with_layout;
 use crate::case::geometry_check::check_geometry;
 
 use crate::case::dim::CaseDim;
-use crate::case::schema::LoadedCase;
+use crate::case::schema::{CheckpointSection, LoadedCase};
 use crate::formats::files::{at, write_atomic, OutputError};
 use crate::formats::plot::{write_png, Plot, Series as PlotSeries, Style};
 use crate::formats::series::Series;
@@ -16,7 +16,7 @@ use crate::run::outputs::Frames;
 use crate::run::settle::SettlingSummary;
 use bisph_core::bodies::Motion;
 use bisph_core::energy::energy_scale;
-use bisph_core::simulation::MidpointParams;
+use bisph_core::simulation::{MidpointParams, SettleReport};
 use bisph_core::Simulation;
 use serde::Serialize;
 use std::ops::ControlFlow;
@@ -129,31 +129,88 @@ pub struct Summary {
 /// run is resumed).
 const SETTLING_FILE: &str = "settling.json";
 
-/// Settles a fresh run when the case asks for it and writes `settling.json`; a resumed run
-/// reads that report back (the checkpoint already holds the settled state).
+/// Settles a fresh run when the case asks for it, or continues the settling that a checkpoint
+/// taken before `t = 0` holds, and writes `settling.json`; a run resumed after `t = 0` reads
+/// that report back (its checkpoint already holds the settled state). Returns the settling
+/// report and the checkpoint the run itself resumes from (none after settling).
 fn settle_or_recall<V: CaseDim>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
     out: &Path,
-    resumed: bool,
-    stop: Option<&AtomicBool>,
+    resumed: Option<Checkpoint<V>>,
+    options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
-) -> Result<Option<SettlingSummary>, RunError> {
+) -> Result<(Option<SettlingSummary>, Option<Checkpoint<V>>), RunError> {
     let path = out.join(SETTLING_FILE);
-    if resumed {
-        let Ok(text) = std::fs::read_to_string(&path) else {
-            return Ok(None);
-        };
-        return Ok(serde_json::from_str(&text).ok());
-    }
+    let checkpoints = SettlingCheckpoints {
+        path: out.join(checkpoint::FILE_NAME),
+        case_source: canonical_source(loaded),
+        loaded,
+        options,
+    };
+    let continued = match resumed {
+        Some(c) => match c.settling {
+            Some(report) => Some((c.sim, report)),
+            None => {
+                let recalled = std::fs::read_to_string(&path)
+                    .ok()
+                    .and_then(|text| serde_json::from_str(&text).ok());
+                return Ok((recalled, Some(c)));
+            }
+        },
+        None => {
+            // A checkpoint left by an earlier run in this folder must not be resumed from
+            // once this one has started.
+            if checkpoints.path.exists() {
+                at(&checkpoints.path, std::fs::remove_file(&checkpoints.path))?;
+            }
+            None
+        }
+    };
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = settle_fresh(loaded, sim, stop, progress)?;
+    let settling = settle_checkpointed(
+        loaded,
+        sim,
+        continued,
+        Some(&checkpoints),
+        options.stop,
+        progress,
+    )?;
     if let Some(s) = &settling {
         write_settling(out, s)?;
     }
-    Ok(settling)
+    Ok((settling, None))
+}
+
+/// Settles `sim` (built fresh from the case) when the case asks for it, writing checkpoints
+/// of the settling state into `checkpoint` as `options` and the case's `[checkpoint]` ask:
+/// from the start, or continued from `resumed`, a checkpoint written so (its settling report
+/// set). For front ends that hold the simulation and resume it themselves.
+pub fn settle_resumable<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    resumed: Option<Checkpoint<V>>,
+    checkpoint: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Option<SettlingSummary>, RunError> {
+    let checkpoints = SettlingCheckpoints {
+        path: checkpoint.to_path_buf(),
+        case_source: canonical_source(loaded),
+        loaded,
+        options,
+    };
+    let continued = resumed.and_then(|c| c.settling.map(|report| (c.sim, report)));
+    settle_checkpointed(
+        loaded,
+        sim,
+        continued,
+        Some(&checkpoints),
+        options.stop,
+        progress,
+    )
 }
 
 /// Settles a fresh simulation when the case asks for it, as [`run`] does: `progress` sees
@@ -166,24 +223,114 @@ pub fn settle_fresh<V: CaseDim>(
     stop: Option<&AtomicBool>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Option<SettlingSummary>, RunError> {
-    let report = &mut |p: crate::run::settle::SettlingProgress| {
+    settle_checkpointed(loaded, sim, None, None, stop, progress)
+}
+
+/// Where and how often settling writes its checkpoints.
+struct SettlingCheckpoints<'a> {
+    path: PathBuf,
+    case_source: String,
+    loaded: &'a LoadedCase,
+    options: &'a RunOptions<'a>,
+}
+
+/// Settles `sim` (built fresh from the case) when the case asks for it: from the start, or
+/// from the settling state `continued` (a checkpoint's state and report). With `checkpoints`,
+/// writes one as the case's `[checkpoint]` asks (and on a stop signal), so that settling
+/// resumes where it stopped, bit for bit.
+fn settle_checkpointed<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    continued: Option<(SimState<V>, SettleReport)>,
+    checkpoints: Option<&SettlingCheckpoints>,
+    stop: Option<&AtomicBool>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Option<SettlingSummary>, RunError> {
+    // The parameters follow from the fresh start (its depth and width), as when settling began.
+    let Some(params) = crate::run::settle::params(loaded, sim) else {
+        return Ok(None);
+    };
+    let original = sim.fluid.clone();
+    let so_far = match continued {
+        Some((state, report)) => {
+            let path = checkpoints.map(|c| c.path.clone()).unwrap_or_default();
+            state
+                .restore(sim)
+                .map_err(|reason| CheckpointError::Mismatch { path, reason })?;
+            report
+        }
+        None => SettleReport::starting(),
+    };
+    let mut saved = Checkpoint::<V>::default();
+    let mut last_checkpoint = Instant::now();
+    let mut failed: Option<OutputError> = None;
+    let mut saved_on_signal = false;
+    let settled = sim.settle_from(&params, &original, so_far, &mut |sim, report| {
         progress(Progress {
-            time: p.time,
-            end: p.max_time,
-            step: p.step,
+            time: report.time,
+            end: params.max_time,
+            step: report.steps,
             settling: true,
         });
-        match stop.is_some_and(|s| s.load(Ordering::SeqCst)) {
+        let signalled = stop.is_some_and(|s| s.load(Ordering::SeqCst));
+        if let Some(c) = checkpoints {
+            let section = &c.loaded.case.checkpoint;
+            if checkpoint_due(section, c.options, report.steps, last_checkpoint, signalled) {
+                saved.case_source.clone_from(&c.case_source);
+                saved.case_text.clone_from(&c.loaded.text);
+                saved.sim.capture(sim);
+                saved.settling = Some(*report);
+                if let Err(e) = checkpoint::write(&c.path, &saved) {
+                    failed = Some(e);
+                    return ControlFlow::Break(());
+                }
+                last_checkpoint = Instant::now();
+                saved_on_signal = signalled;
+            }
+        }
+        match signalled {
             true => ControlFlow::Break(()),
             false => ControlFlow::Continue(()),
         }
-    };
-    let settling = crate::run::settle::settle_reporting(loaded, sim, report)
-        .map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
-    match settling {
-        Some(s) if s.interrupted() => Err(RunError::SettlingInterrupted { time: s.time }),
-        other => Ok(other),
+    });
+    let report = settled.map_err(|e| RunError::Stopped(Box::new(from_sim_error(&e, sim))))?;
+    if let Some(e) = failed {
+        return Err(RunError::Output(e));
     }
+    let summary = SettlingSummary::new(&report, &params);
+    if summary.interrupted() {
+        return Err(RunError::SettlingInterrupted {
+            time: summary.time,
+            checkpoint: checkpoints
+                .filter(|_| saved_on_signal)
+                .map(|c| c.path.clone()),
+        });
+    }
+    Ok(Some(summary))
+}
+
+/// Whether a checkpoint is due at step `step`: every `every_steps` steps, every
+/// `every_minutes` of wall clock since `last`, or on a stop signal (options override the
+/// case's `[checkpoint]`).
+fn checkpoint_due(
+    section: &CheckpointSection,
+    options: &RunOptions,
+    step: u64,
+    last: Instant,
+    signalled: bool,
+) -> bool {
+    let every_steps = options.checkpoint_steps.unwrap_or(section.every_steps);
+    let every_seconds = 60.0 * options.checkpoint_minutes.unwrap_or(section.every_minutes);
+    (every_steps > 0 && step > 0 && step.is_multiple_of(every_steps))
+        || (every_seconds > 0.0 && last.elapsed().as_secs_f64() >= every_seconds)
+        || (signalled && section.on_signal)
+}
+
+/// The case file's canonical path (what a checkpoint saves to find relative file names).
+fn canonical_source(loaded: &LoadedCase) -> String {
+    std::fs::canonicalize(&loaded.source)
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|_| loaded.source.clone())
 }
 
 /// Writes the settling report into the output folder (`settling.json`).
@@ -495,14 +642,7 @@ pub fn run<V: CaseDim>(
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
-    let settling = settle_or_recall(
-        loaded,
-        &mut sim,
-        out,
-        resumed.is_some(),
-        options.stop,
-        progress,
-    )?;
+    let (settling, resumed) = settle_or_recall(loaded, &mut sim, out, resumed, options, progress)?;
     let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
     let ending = active.advance_to_end(&mut sim, options, progress)?;
     active.finish(&mut sim, settling, ending)
@@ -627,9 +767,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             &headers,
             &free_csv_paths,
         )?;
-        let case_source = std::fs::canonicalize(&loaded.source)
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|_| loaded.source.clone());
+        let case_source = canonical_source(loaded);
         let watch = Watch::new(loaded.case.diagnostics.clone());
         sim.timings = Default::default();
         let started = Instant::now();
@@ -702,7 +840,8 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             }
             self.mark_good(sim);
             let signalled = options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
-            if self.checkpoint_due(sim.step, signalled, options)
+            let section = &self.loaded.case.checkpoint;
+            if checkpoint_due(section, options, sim.step, self.last_checkpoint, signalled)
                 && Some(sim.step) != self.resumed_from_step
             {
                 self.write_checkpoint()?;
@@ -720,18 +859,6 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             }
             self.record_step(sim)?;
         }
-    }
-
-    /// Whether a checkpoint is due at step `step`: every `every_steps` steps, every
-    /// `every_minutes` of wall clock, or on a stop signal (options override the case).
-    fn checkpoint_due(&self, step: u64, signalled: bool, options: &RunOptions) -> bool {
-        let settings = &self.loaded.case.checkpoint;
-        let every_steps = options.checkpoint_steps.unwrap_or(settings.every_steps);
-        let every_seconds = 60.0 * options.checkpoint_minutes.unwrap_or(settings.every_minutes);
-        (every_steps > 0 && step > 0 && step.is_multiple_of(every_steps))
-            || (every_seconds > 0.0
-                && self.last_checkpoint.elapsed().as_secs_f64() >= every_seconds)
-            || (signalled && settings.on_signal)
     }
 
     /// One row of each CSV series at the current time (energy, flux forcing, forces, free
@@ -904,6 +1031,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             run: self.counters.clone(),
             history: self.history.clone(),
             probe_history: self.probe_history.clone(),
+            settling: None,
         };
         checkpoint::write(&self.checkpoint_path, &c)
     }

@@ -50,7 +50,8 @@ impl SettlingSummary {
         self.outcome == INTERRUPTED
     }
 
-    fn new(report: &SettleReport, params: &SettleParams) -> Self {
+    /// The summary of a settling stage that ended with `report`.
+    pub(crate) fn new(report: &SettleReport, params: &SettleParams) -> Self {
         SettlingSummary {
             outcome: match report.outcome {
                 SettleOutcome::Settled => "settled",
@@ -129,7 +130,7 @@ pub fn settle_reporting<V: Vector>(
     let Some(params) = params(loaded, sim) else {
         return Ok(None);
     };
-    let report = sim.settle(&params, &mut |r: &SettleReport| {
+    let report = sim.settle(&params, &mut |_, r: &SettleReport| {
         progress(SettlingProgress {
             time: r.time,
             max_time: params.max_time,
