@@ -19,9 +19,13 @@ use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::{Simulation, Vector};
 use bisph_io::case::{build_simulation, parse_case, CaseDim};
 use bisph_io::formats::plot::line_plot_png as plot;
+use bisph_io::run::checkpoint::{self, Checkpoint};
+use bisph_io::run::{settle_resumable, RunOptions};
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
+use std::time::{Duration, Instant};
 
 /// Gravity [m/s^2] and density [kg/m^3] of every tank.
 const G: f64 = 9.81;
@@ -148,6 +152,7 @@ struct Floor {
 }
 
 /// What one run measured.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct StillWaterRun {
     /// Sample times [s].
     t: Vec<f64>,
@@ -167,7 +172,97 @@ struct StillWaterRun {
     settling: String,
 }
 
-fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<StillWaterRun, String> {
+/// Samples of a run (the kinetic energy and the bottom pressure).
+const SAMPLES: usize = 100;
+
+/// How often a run under way saves its state, and (for tests) the sample after which it stops
+/// as if killed.
+struct Pace {
+    save_every: Duration,
+    stop_after: Option<usize>,
+}
+
+/// Saves every 10 minutes of wall clock, as `bisph run` checkpoints by default.
+const PACE: Pace = Pace {
+    save_every: Duration::from_secs(600),
+    stop_after: None,
+};
+
+/// The files of a run under way in its folder: a checkpoint of the simulation (while settling
+/// or at the last sample saved), the measurements up to that sample, the build that wrote them
+/// and, once the run has ended, its result. A run starts afresh where the build differs.
+const STATE_FILE: &str = "checkpoint.bin";
+const SERIES_FILE: &str = "series.json";
+const BUILD_FILE: &str = "build.txt";
+const RESULT_FILE: &str = "result.json";
+
+/// A fingerprint of the running program (its executable's bytes), so that figures saved by
+/// one build are never mixed with another's.
+fn build_fingerprint() -> Result<String, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot locate the program: {e}"))?;
+    let bytes = std::fs::read(&exe).map_err(|e| format!("cannot read {}: {e}", exe.display()))?;
+    Ok(format!(
+        "{:016x}",
+        bisph_io::run::checkpoint::fnv1a64(&bytes)
+    ))
+}
+
+/// What a run's folder holds of an earlier invocation by this build.
+enum Saved<V: Vector> {
+    Nothing,
+    Finished(StillWaterRun),
+    Settling(Checkpoint<V>),
+    Running(Checkpoint<V>, StillWaterRun),
+}
+
+/// Reads what `dir` holds of an earlier invocation of build `build`; anything else in it
+/// (another build's files, a state whose measurements do not reach it) is cleared.
+fn saved<V: CaseDim>(dir: &Path, build: &str) -> Result<Saved<V>, String> {
+    let same_build = std::fs::read_to_string(dir.join(BUILD_FILE)).is_ok_and(|b| b == build);
+    let json = |name: &str| -> Option<StillWaterRun> {
+        let text = std::fs::read_to_string(dir.join(name)).ok()?;
+        serde_json::from_str(&text).ok()
+    };
+    if same_build {
+        if let Some(run) = json(RESULT_FILE) {
+            return Ok(Saved::Finished(run));
+        }
+        if let Ok(c) = checkpoint::read::<V>(&dir.join(STATE_FILE)) {
+            if c.settling.is_some() {
+                return Ok(Saved::Settling(c));
+            }
+            if let Some(run) = json(SERIES_FILE).filter(|r| r.t.last() == Some(&c.sim.time)) {
+                return Ok(Saved::Running(c, run));
+            }
+        }
+    }
+    if dir.exists() {
+        std::fs::remove_dir_all(dir).map_err(|e| format!("cannot clear {}: {e}", dir.display()))?;
+    }
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    write(&dir.join(BUILD_FILE), build.as_bytes())?;
+    Ok(Saved::Nothing)
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    bisph_io::formats::files::write_atomic(path, bytes).map_err(|e| e.to_string())
+}
+
+fn to_json(run: &StillWaterRun) -> Vec<u8> {
+    serde_json::to_vec(run).expect("the measurements serialise")
+}
+
+/// Runs one tank with one model: settles, then samples the run. The run keeps its state in
+/// `dir` as it goes (see [`STATE_FILE`]), so that a validation stopped part-way continues
+/// where it stopped, with the figures of an uninterrupted run.
+fn run_tank<V: CaseDim>(
+    tank: &Tank,
+    model: &Model,
+    quick: bool,
+    dir: &Path,
+    build: &str,
+    pace: &Pace,
+) -> Result<StillWaterRun, String> {
     let (dx, end) = if quick { tank.quick } else { tank.full };
     let mut overrides: Vec<String> = model.overrides.iter().map(|s| s.to_string()).collect();
     overrides.push(format!("resolution.dx={dx}"));
@@ -187,31 +282,68 @@ fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<Still
         }
         None => tank.depth,
     };
-    let settling = match bisph_io::run::settle::settle(&loaded, &mut sim) {
-        Ok(Some(s)) => format!(
-            "settling {} after {:.2} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(gH)",
-            s.outcome, s.time, s.steps, s.wall_seconds, s.max_speed_relative
-        ),
-        Ok(None) => "no settling".into(),
-        Err(e) => format!("settling stopped: {e}"),
-    };
-    let speed_scale = (G * depth).sqrt();
-    let mass: f64 = sim.fluid.mass.iter().sum();
-    let bottom = bottom_element(&sim, V::from_slice(&tank.bottom[..V::DIM]))
-        .ok_or("the tank has no bottom wall element")?;
-    let samples = 100;
+    let state = dir.join(STATE_FILE);
     let mut run = StillWaterRun {
-        t: Vec::new(),
-        kinetic: Vec::new(),
-        max_speed: 0.0,
-        bottom: Vec::new(),
-        behind: 0,
-        stopped: None,
         depth,
-        settling,
+        ..Default::default()
     };
-    'outer: for k in 0..=samples {
-        let target = end * k as f64 / samples as f64;
+    let mut resumed = None;
+    match saved::<V>(dir, build)? {
+        Saved::Finished(run) => return Ok(run),
+        Saved::Running(c, series) => {
+            c.sim.restore(&mut sim)?;
+            run = series;
+        }
+        Saved::Settling(c) => resumed = Some(c),
+        Saved::Nothing => {}
+    }
+    if run.t.is_empty() {
+        let options = RunOptions {
+            checkpoint_minutes: Some(pace.save_every.as_secs_f64() / 60.0),
+            ..Default::default()
+        };
+        run.settling = match settle_resumable(&loaded, &mut sim, resumed, &state, &options, &mut |_| {}) {
+            Ok(Some(s)) => format!(
+                "settling {} after {:.2} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(gH)",
+                s.outcome, s.time, s.steps, s.wall_seconds, s.max_speed_relative
+            ),
+            Ok(None) => "no settling".into(),
+            Err(e) => format!("settling stopped: {e}"),
+        };
+    }
+    sample(&mut sim, &mut run, tank, end, dir, &loaded.text, pace)?;
+    run.behind = sim
+        .walls
+        .count_behind(&sim.fluid.position, sim.config.kernel.support);
+    write(&dir.join(RESULT_FILE), &to_json(&run))?;
+    for name in [STATE_FILE, SERIES_FILE] {
+        let _ = std::fs::remove_file(dir.join(name));
+    }
+    Ok(run)
+}
+
+/// Runs `sim` to `end`, recording the samples from the first one `run` lacks and the largest
+/// speed after every step, and saving the state at a sample as `pace` says.
+fn sample<V: CaseDim>(
+    sim: &mut Simulation<V>,
+    run: &mut StillWaterRun,
+    tank: &Tank,
+    end: f64,
+    dir: &Path,
+    case_text: &str,
+    pace: &Pace,
+) -> Result<(), String> {
+    let speed_scale = (G * run.depth).sqrt();
+    let mass: f64 = sim.fluid.mass.iter().sum();
+    let bottom = bottom_element(sim, V::from_slice(&tank.bottom[..V::DIM]))
+        .ok_or("the tank has no bottom wall element")?;
+    let mut saved_at = Instant::now();
+    let mut state = Checkpoint::<V> {
+        case_text: case_text.into(),
+        ..Default::default()
+    };
+    'outer: for k in run.t.len()..=SAMPLES {
+        let target = end * k as f64 / SAMPLES as f64;
         while sim.time < target - 1e-12 {
             // Steps are clamped at the end of the run only: the samples need no tiny steps.
             if let Err(e) = sim.advance(Some(end)) {
@@ -228,14 +360,35 @@ fn run_tank<V: CaseDim>(tank: &Tank, model: &Model, quick: bool) -> Result<Still
             }
         }
         run.t.push(sim.time);
-        run.kinetic.push(sim.energy().kinetic / (mass * G * depth));
+        run.kinetic
+            .push(sim.energy().kinetic / (mass * G * run.depth));
         run.bottom
-            .push(sim.walls.elements.pressure[bottom] / (RHO * G * depth));
+            .push(sim.walls.elements.pressure[bottom] / (RHO * G * run.depth));
+        if saved_at.elapsed() >= pace.save_every && k < SAMPLES {
+            // The measurements first: a state without them is not resumed from.
+            write(&dir.join(SERIES_FILE), &to_json(run))?;
+            state.sim.capture(sim);
+            checkpoint::write(&dir.join(STATE_FILE), &state).map_err(|e| e.to_string())?;
+            saved_at = Instant::now();
+        }
+        if pace.stop_after == Some(k) {
+            return Err(format!("stopped after sample {k}"));
+        }
     }
-    run.behind = sim
-        .walls
-        .count_behind(&sim.fluid.position, sim.config.kernel.support);
-    Ok(run)
+    Ok(())
+}
+
+/// The folder name of a run: its tank, model and resolution.
+fn run_folder(tank: &Tank, model: &Model, quick: bool) -> String {
+    let name = format!(
+        "{}-{}-{}",
+        tank.name,
+        model.name,
+        if quick { "quick" } else { "full" }
+    );
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect()
 }
 
 /// The wall element facing down (normal along gravity, out of the fluid) nearest to `point`.
@@ -347,17 +500,22 @@ impl ValidationCase for StillWater {
             .enumerate()
             .flat_map(|(k, tank)| (0..tank.models.len()).map(move |m| (k, m)))
             .collect();
+        let build = build_fingerprint()?;
+        let folders = out.join("runs");
         let mut runs = jobs
             .par_iter()
             .map(|&(k, m)| {
                 let (tank, model) = (&TANKS[k], &TANKS[k].models[m].0);
+                let dir = folders.join(run_folder(tank, model, quick));
                 match tank.dim {
-                    2 => run_tank::<DVec2>(tank, model, quick),
-                    _ => run_tank::<DVec3>(tank, model, quick),
+                    2 => run_tank::<DVec2>(tank, model, quick, &dir, &build, &PACE),
+                    _ => run_tank::<DVec3>(tank, model, quick, &dir, &build, &PACE),
                 }
             })
             .collect::<Result<Vec<_>, _>>()?
             .into_iter();
+        // Every run has ended: nothing is left to resume.
+        let _ = std::fs::remove_dir_all(&folders);
         for (k, tank) in TANKS.iter().enumerate() {
             let end = if quick { tank.quick.1 } else { tank.full.1 };
             let mut kinetic_series = Vec::new();
@@ -404,4 +562,63 @@ impl ValidationCase for StillWater {
 /// The still-water case.
 pub fn cases() -> Vec<Box<dyn ValidationCase>> {
     vec![Box::new(StillWater)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run stopped part-way (after its state was saved at a sample) and run again continues
+    /// from the saved state to the figures of an uninterrupted run, bit for bit; a folder left
+    /// by another build is started afresh.
+    #[test]
+    fn a_stopped_run_continues_to_the_figures_of_an_uninterrupted_one() {
+        let box_2d = &TANKS[0];
+        let tank = Tank {
+            quick: (0.1, 0.5),
+            quick_settling: Some(0.2),
+            floor: None,
+            models: &[],
+            ..*box_2d
+        };
+        let root = std::env::temp_dir().join(format!("bisph-still-water-{}", std::process::id()));
+        let every_sample = |stop_after| Pace {
+            save_every: Duration::ZERO,
+            stop_after,
+        };
+        let (a, b) = (root.join("a"), root.join("b"));
+        let whole = run_tank::<DVec2>(&tank, &BI, true, &a, "one", &every_sample(None)).unwrap();
+        let stopped = run_tank::<DVec2>(&tank, &BI, true, &b, "one", &every_sample(Some(40)));
+        assert_eq!(stopped.unwrap_err(), "stopped after sample 40");
+        assert!(b.join(STATE_FILE).exists() && b.join(SERIES_FILE).exists());
+        let continued =
+            run_tank::<DVec2>(&tank, &BI, true, &b, "one", &every_sample(None)).unwrap();
+        let figures = |r: &StillWaterRun| {
+            (
+                r.t.clone(),
+                r.kinetic.clone(),
+                r.bottom.clone(),
+                r.max_speed,
+                r.behind,
+                r.stopped.clone(),
+            )
+        };
+        assert_eq!(whole.t.len(), SAMPLES + 1);
+        assert_eq!(figures(&whole), figures(&continued));
+        // Outcome, settling time and steps (the wall seconds differ).
+        let settled = |r: &StillWaterRun| r.settling.split(" steps").next().unwrap().to_string();
+        assert!(
+            whole.settling.starts_with("settling "),
+            "{}",
+            whole.settling
+        );
+        assert_eq!(settled(&whole), settled(&continued));
+        // The finished run is recalled by its build, and run again by another.
+        let recalled =
+            run_tank::<DVec2>(&tank, &BI, true, &b, "one", &every_sample(Some(0))).unwrap();
+        assert_eq!(figures(&recalled), figures(&whole));
+        let other = run_tank::<DVec2>(&tank, &BI, true, &b, "two", &every_sample(Some(0)));
+        assert_eq!(other.unwrap_err(), "stopped after sample 0");
+        let _ = std::fs::remove_dir_all(&root);
+    }
 }
