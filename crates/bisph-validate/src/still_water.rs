@@ -50,8 +50,8 @@ const USAW: Model = Model {
     overrides: &["boundary=\"usaw\""],
 };
 
-const ENERGY_WALL_PRESSURE: &str = "the energy walls' wall pressure (paper 1, eq 71) weighs half a kernel of a pressure that grows away from the wall, so it overestimates the load on a bottom by an amount that falls with dx";
-const ENERGY_LIMITATION: &str = "the energy-conserving walls are zeroth-order consistent (paper 1): within a kernel support of a wall that is not horizontal the model has no static rest state (the fluid sum gives only the part gamma of the vertical pressure gradient, docs/design.md), so a slow flow stays along the sloped and side walls; and the wall pressure of eq 71 overestimates the bottom load at this resolution";
+const ENERGY_WALL_PRESSURE: &str = "the energy-conserving walls are zeroth-order consistent (paper 1): next to the side walls they give the water only the part gamma of its vertical support (docs/design.md), and the interior carries the rest: settled at H/20, the pressure at mid-depth and mid-width reads 1.016 rho g H/2, and the floor's element pressure (eq 71) 0.73 rho g H in the corners and 1.020 at mid-width, while the floor as a whole carries the water's weight exactly (mean 1.005 rho0 g H: the water held is 0.5% denser than rho0)";
+const ENERGY_LIMITATION: &str = "the energy-conserving walls are zeroth-order consistent (paper 1): within a kernel support of a wall that is not horizontal the model has no static rest state (the fluid sum gives only the part gamma of the vertical pressure gradient, docs/design.md), so a slow flow stays along the sloped and side walls, and the floor's load gathers away from them (eq 71 reads high mid-floor, low in the corners)";
 
 const SPHERIC_BOTTOM: &str = "not met at quick resolution: at dx = 0.55/5 the water is five particles deep and the bottom element's kernel support reaches 80% of the depth; the classic BI wall pressure there reads 3.6% above the weight of the water held (0.7% above rho g times the 0.55 m level, which the lattice does not fill), against 0.3% in the box tanks at H/10 and H/20";
 
