@@ -33,7 +33,8 @@ pub enum RunError {
     SettlingInterrupted {
         /// Settling time reached [s].
         time: f64,
-        /// The checkpoint written to resume from (none when `checkpoint.on_signal` is off).
+        /// The checkpoint of the settling state to resume from (none when `checkpoint.on_signal`
+        /// is off and no periodic one was written).
         checkpoint: Option<PathBuf>,
     },
     /// A divergence watch tripped (outputs up to the last good state are kept;

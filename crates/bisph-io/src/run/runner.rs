@@ -142,27 +142,20 @@ fn settle_or_recall<V: CaseDim>(
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(Option<SettlingSummary>, Option<Checkpoint<V>>), RunError> {
     let path = out.join(SETTLING_FILE);
-    let checkpoints = SettlingCheckpoints {
-        path: out.join(checkpoint::FILE_NAME),
-        case_source: canonical_source(loaded),
-        loaded,
-        options,
-    };
-    let continued = match resumed {
-        Some(c) => match c.settling {
-            Some(report) => Some((c.sim, report)),
-            None => {
-                let recalled = std::fs::read_to_string(&path)
-                    .ok()
-                    .and_then(|text| serde_json::from_str(&text).ok());
-                return Ok((recalled, Some(c)));
-            }
-        },
+    let checkpoint_path = out.join(checkpoint::FILE_NAME);
+    let settling_state = match resumed {
+        Some(c) if c.settling.is_none() => {
+            let recalled = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|text| serde_json::from_str(&text).ok());
+            return Ok((recalled, Some(c)));
+        }
+        Some(c) => Some(c),
         None => {
             // A checkpoint left by an earlier run in this folder must not be resumed from
             // once this one has started.
-            if checkpoints.path.exists() {
-                at(&checkpoints.path, std::fs::remove_file(&checkpoints.path))?;
+            if checkpoint_path.exists() {
+                at(&checkpoint_path, std::fs::remove_file(&checkpoint_path))?;
             }
             None
         }
@@ -170,12 +163,12 @@ fn settle_or_recall<V: CaseDim>(
     if path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = settle_checkpointed(
+    let settling = settle_resumable(
         loaded,
         sim,
-        continued,
-        Some(&checkpoints),
-        options.stop,
+        settling_state,
+        &checkpoint_path,
+        options,
         progress,
     )?;
     if let Some(s) = &settling {
@@ -264,7 +257,6 @@ fn settle_checkpointed<V: CaseDim>(
     let mut saved = Checkpoint::<V>::default();
     let mut last_checkpoint = Instant::now();
     let mut failed: Option<OutputError> = None;
-    let mut saved_on_signal = false;
     let settled = sim.settle_from(&params, &original, so_far, &mut |sim, report| {
         progress(Progress {
             time: report.time,
@@ -285,7 +277,6 @@ fn settle_checkpointed<V: CaseDim>(
                     return ControlFlow::Break(());
                 }
                 last_checkpoint = Instant::now();
-                saved_on_signal = signalled;
             }
         }
         match signalled {
@@ -301,9 +292,11 @@ fn settle_checkpointed<V: CaseDim>(
     if summary.interrupted() {
         return Err(RunError::SettlingInterrupted {
             time: summary.time,
+            // Any checkpoint in the folder now is of this settling (a fresh run removes an
+            // earlier run's before it starts).
             checkpoint: checkpoints
-                .filter(|_| saved_on_signal)
-                .map(|c| c.path.clone()),
+                .map(|c| c.path.clone())
+                .filter(|path| path.exists()),
         });
     }
     Ok(Some(summary))
