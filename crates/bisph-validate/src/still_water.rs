@@ -13,7 +13,8 @@
 //! second half); no particle behind a wall. `H` is the water depth; in the SPHERIC tank, which the
 //! lattice does not tile, it is the depth of the water the particles hold. At quick resolution
 //! the SPHERIC tank settles for at most 15 s (its default, `200 / beta`, is 46 s for a tank
-//! 3.22 m long).
+//! 3.22 m long). The runs save their state as they go (see [`STATE_FILE`]), so that the full
+//! validation, hours long, continues where a stopped invocation left it.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use bisph_core::{Simulation, Vector};
