@@ -4,8 +4,7 @@
 use bisph_core::Simulation;
 use bisph_io::case::build_simulation;
 use bisph_io::parse_case;
-use bisph_io::run::settle::settle;
-use bisph_io::run::{run_built, run_case, RunOptions};
+use bisph_io::run::{run_built, run_case, settle_fresh, RunOptions};
 use glam::DVec2;
 
 const TANK: &str = r#"
@@ -48,7 +47,7 @@ fn a_caller_built_run_writes_the_series_of_a_whole_run() {
     let loaded = parse_case("<tank>", TANK, &[]).unwrap();
     let a = run_case(&loaded, &whole, &mut |_| {}).unwrap();
     let mut sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
-    let settling = settle(&loaded, &mut sim).unwrap();
+    let settling = settle_fresh(&loaded, &mut sim, None, &mut |_| {}).unwrap();
     assert!(settling.is_some());
     let b = run_built(
         &loaded,

@@ -4,9 +4,19 @@
 
 use bisph_core::Simulation;
 use bisph_io::case::build_simulation;
+use bisph_io::case::LoadedCase;
 use bisph_io::parse_case;
-use bisph_io::run::settle::settle;
+use bisph_io::run::settle::SettlingSummary;
+use bisph_io::run::{settle_fresh, RunError};
 use glam::DVec2;
+
+/// Settles as `bisph run` does before `t = 0` (no checkpoints, no stop signal).
+fn settle(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<DVec2>,
+) -> Result<Option<SettlingSummary>, RunError> {
+    settle_fresh(loaded, sim, None, &mut |_| {})
+}
 
 const TANK: &str = r#"
 name = "tank"

@@ -1,5 +1,5 @@
 //! Settings of the midpoint iterations and of settling, and what settling reports (the types
-//! the integrators and [`super::Simulation::settle`] take and give, apart from their code).
+//! the integrators and [`super::Simulation::settle_from`] take and give, apart from their code).
 
 /// Settings of the midpoint iterations.
 #[derive(Clone, Copy, Debug, PartialEq)]

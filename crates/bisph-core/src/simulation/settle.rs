@@ -27,21 +27,11 @@ use std::time::Instant;
 impl<V: Vector> Simulation<V> {
     /// Settles the fluid (see the module documentation) with the walls held at their
     /// `t = 0` place, then restarts the clock and the energy books at the state reached.
-    /// `on_step` sees the simulation and the report after every settling step; returning
-    /// `Break` stops settling there ([`SettleOutcome::Interrupted`]).
-    pub fn settle(
-        &mut self,
-        params: &SettleParams,
-        on_step: &mut dyn FnMut(&Self, &SettleReport) -> ControlFlow<()>,
-    ) -> Result<SettleReport, SimError> {
-        let original = self.fluid.clone();
-        self.settle_from(params, &original, SettleReport::starting(), on_step)
-    }
-
-    /// [`Simulation::settle`] continued from a settling state: the simulation holds the state
-    /// reached (restored from a checkpoint taken in `on_step`), `original` is the fluid as it
-    /// started settling and `so_far` the report at that state. Continuing gives the bits of
-    /// settling without the break.
+    /// `original` is the fluid as it started settling and `so_far` the report at the current
+    /// state: [`SettleReport::starting`] for a fresh start, or the report saved with a state
+    /// restored from a checkpoint taken in `on_step` (continuing gives the bits of settling
+    /// without the break). `on_step` sees the simulation and the report after every settling
+    /// step; returning `Break` stops settling there ([`SettleOutcome::Interrupted`]).
     pub fn settle_from(
         &mut self,
         params: &SettleParams,

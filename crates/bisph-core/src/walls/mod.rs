@@ -250,7 +250,7 @@ impl<V: Vector> Walls<V> {
             }
         }
         self.place_stretching(true);
-        self.wrap_elements();
+        self.wrap_corners();
         self.elements.refresh_gauss_rules();
         self.grid.rebuild(&self.elements.centre);
         self.refresh_gamma();
@@ -275,10 +275,17 @@ impl<V: Vector> Walls<V> {
     }
 
     /// Moves every element whose centre left the primary period back by whole periods (its
-    /// corners with it).
+    /// corners and Gauss rule with it).
     pub fn wrap_elements(&mut self) {
+        if self.wrap_corners() {
+            self.elements.refresh_gauss_rules();
+        }
+    }
+
+    /// [`Walls::wrap_elements`] without the Gauss rules; `true` when some element moved.
+    fn wrap_corners(&mut self) -> bool {
         if !self.periodicity.any() {
-            return;
+            return false;
         }
         let e = &mut self.elements;
         let mut moved = false;
@@ -292,9 +299,7 @@ impl<V: Vector> Walls<V> {
                 moved = true;
             }
         }
-        if moved {
-            e.refresh_gauss_rules();
-        }
+        moved
     }
 
     /// Sets the element velocities of moving bodies to their values at time `t`, keeping the

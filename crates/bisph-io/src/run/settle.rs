@@ -5,7 +5,6 @@ use crate::case::schema::LoadedCase;
 use bisph_core::simulation::{SettleOutcome, SettleParams, SettleReport};
 use bisph_core::{Simulation, Vector};
 use serde::{Deserialize, Serialize};
-use std::ops::ControlFlow;
 
 /// Default tolerance of `settle.tolerance`.
 pub const DEFAULT_TOLERANCE: f64 = 1e-3;
@@ -108,47 +107,6 @@ pub fn params<V: Vector>(loaded: &LoadedCase, sim: &Simulation<V>) -> Option<Set
         max_time: s.max_time.unwrap_or(DEFAULT_MAX_TIME_BETA / damping),
         max_kinetic: FLOW_KINETIC * mass * g * depth,
     })
-}
-
-/// Settles a fresh simulation when it settles ([`settles`]); returns what `summary.json`
-/// reports.
-pub fn settle<V: Vector>(
-    loaded: &LoadedCase,
-    sim: &mut Simulation<V>,
-) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
-    settle_reporting(loaded, sim, &mut |_| ControlFlow::Continue(()))
-}
-
-/// [`settle`], calling `progress` after every settling step with the settling time, the most
-/// settling time and the steps so far; `Break` from it stops settling at that step (outcome
-/// `interrupted`).
-pub fn settle_reporting<V: Vector>(
-    loaded: &LoadedCase,
-    sim: &mut Simulation<V>,
-    progress: &mut dyn FnMut(SettlingProgress) -> ControlFlow<()>,
-) -> Result<Option<SettlingSummary>, bisph_core::SimError> {
-    let Some(params) = params(loaded, sim) else {
-        return Ok(None);
-    };
-    let report = sim.settle(&params, &mut |_, r: &SettleReport| {
-        progress(SettlingProgress {
-            time: r.time,
-            max_time: params.max_time,
-            step: r.steps,
-        })
-    })?;
-    Ok(Some(SettlingSummary::new(&report, &params)))
-}
-
-/// Where settling stands, for a front end.
-#[derive(Debug, Clone, Copy)]
-pub struct SettlingProgress {
-    /// Settling time so far [s].
-    pub time: f64,
-    /// Most settling time [s].
-    pub max_time: f64,
-    /// Settling steps so far.
-    pub step: u64,
 }
 
 /// Depth (extent along `g`) and width (largest extent along a coordinate axis across `g`) of
