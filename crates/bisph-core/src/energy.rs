@@ -22,7 +22,11 @@ pub struct EnergyBudget {
     pub viscous_dissipation: f64,
     /// Cumulative work done on the fluid by the driving body force (zero without one).
     pub forcing_work: f64,
-    /// `kinetic + compressible + potential + wall_work + viscous_dissipation - forcing_work`.
+    /// Cumulative compressible energy removed by the density diffusion,
+    /// `int sum_i -m_i p_i D_i / rho_i^2 dt` (zero without diffusion).
+    pub diffusion_dissipation: f64,
+    /// `kinetic + compressible + potential + wall_work + viscous_dissipation
+    /// + diffusion_dissipation - forcing_work`.
     pub total: f64,
 }
 

@@ -296,7 +296,8 @@ impl Simulation {
 
     /// The energy budget now [J; J/m in 2-D], the columns of `energy.csv`: `kinetic`,
     /// `compressible` (sum m e(rho)), `potential` (-sum m g . r), `wall_work`
-    /// (int sum F_j . U_j dt, paper 1), `viscous_dissipation`, `forcing_work` and `total`.
+    /// (int sum F_j . U_j dt, paper 1), `viscous_dissipation`, `forcing_work`, `diffusion_dissipation`
+    /// (the compressible energy the density diffusion removed) and `total`.
     #[getter]
     fn energy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let e = self.solver.energy();
@@ -308,6 +309,7 @@ impl Simulation {
         d.set_item("total", e.total)?;
         d.set_item("viscous_dissipation", e.viscous_dissipation)?;
         d.set_item("forcing_work", e.forcing_work)?;
+        d.set_item("diffusion_dissipation", e.diffusion_dissipation)?;
         Ok(d)
     }
 

@@ -108,6 +108,7 @@ impl<V: Vector> Simulation<V> {
         self.last_residue = residue;
         self.wall_work += dt * self.wall_power;
         self.viscous_dissipation += dt * self.viscous_power;
+        self.diffusion_dissipation += dt * self.diffusion_power;
         // Bodies: drift with the midpoint velocities, then V^{n+1} = V^n + dt A.
         let body_acceleration = self.walls.dynamic_accelerations();
         for (k, v) in body_velocity.iter_mut().enumerate() {

@@ -21,8 +21,8 @@ use crate::neighbours::{CandidateList, CellGrid, PairList, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
-    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, FluidNeighbours, RateModel,
-    Viscosity,
+    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, DissipationRates,
+    FluidNeighbours, RateModel, Viscosity,
 };
 use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::Shepard;
@@ -132,7 +132,7 @@ struct Scratch<V> {
     velocity: Vec<V>,
     density: Vec<f64>,
     volume: Vec<f64>,
-    viscous_power: Vec<f64>,
+    dissipation: Vec<DissipationRates>,
     lost_energy: Vec<f64>,
     previous_acceleration: Vec<V>,
     previous_density_rate: Vec<f64>,
@@ -208,6 +208,11 @@ pub struct Simulation<V: Vector> {
     pub viscous_dissipation: f64,
     /// Viscous dissipation rate at the last rate evaluation.
     pub viscous_power: f64,
+    /// Cumulative compressible energy removed by the density diffusion,
+    /// `int sum_i -m_i p_i D_i / rho_i^2 dt`.
+    pub diffusion_dissipation: f64,
+    /// Diffusion dissipation rate at the last rate evaluation.
+    pub diffusion_power: f64,
     /// Cumulative work of the driving force, `int F . sum_i m_i u_i dt`.
     pub forcing_work: f64,
     /// Current driving acceleration (zero without flux control).
@@ -266,6 +271,8 @@ impl<V: Vector> Simulation<V> {
             wall_power: 0.0,
             viscous_dissipation: 0.0,
             viscous_power: 0.0,
+            diffusion_dissipation: 0.0,
+            diffusion_power: 0.0,
             forcing_work: 0.0,
             body_force: V::ZERO,
             flux_history: FluxHistory::default(),
@@ -627,7 +634,7 @@ impl<V: Vector> Simulation<V> {
         };
         let Some(origin) = origin.filter(|o| skin > 0.0 && fits(o)) else {
             self.scratch.candidates_valid = false;
-            self.fluid_grid.rebuild(&self.fluid.position);
+                self.fluid_grid.rebuild(&self.fluid.position);
             return false;
         };
         self.fluid_grid.rebuild(origin);
@@ -730,8 +737,8 @@ impl<V: Vector> Simulation<V> {
             .for_each(|(p, &rho)| *p = eos.pressure(rho));
         let volume = &mut self.scratch.volume;
         volume.resize(mass.len(), 0.0);
-        let viscous_power = &mut self.scratch.viscous_power;
-        viscous_power.resize(mass.len(), 0.0);
+        let dissipation = &mut self.scratch.dissipation;
+        dissipation.resize(mass.len(), DissipationRates::default());
         volume
             .par_iter_mut()
             .zip(mass.par_iter().zip(self.scratch.density.par_iter()))
@@ -789,12 +796,17 @@ impl<V: Vector> Simulation<V> {
             wall_grid,
             acceleration,
             density_rate,
-            viscous_power,
+            dissipation,
         };
         self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
+        let d = &self.scratch.dissipation;
         self.viscous_power = if model.viscosity.active() {
-            let p = &self.scratch.viscous_power;
-            crate::energy::deterministic_sum(p.len(), |i| p[i])
+            crate::energy::deterministic_sum(d.len(), |i| d[i].viscous)
+        } else {
+            0.0
+        };
+        self.diffusion_power = if model.diffusion.scale != 0.0 {
+            crate::energy::deterministic_sum(d.len(), |i| d[i].diffusion)
         } else {
             0.0
         };
@@ -970,7 +982,13 @@ impl<V: Vector> Simulation<V> {
             wall_work: self.wall_work,
             viscous_dissipation: self.viscous_dissipation,
             forcing_work: self.forcing_work,
-            total: kinetic + compressible + potential + self.wall_work + self.viscous_dissipation
+            diffusion_dissipation: self.diffusion_dissipation,
+            total: kinetic
+                + compressible
+                + potential
+                + self.wall_work
+                + self.viscous_dissipation
+                + self.diffusion_dissipation
                 - self.forcing_work,
         }
     }
@@ -1052,7 +1070,7 @@ struct Sweep<'a, V: Vector> {
     wall_grid: &'a CellGrid<V>,
     acceleration: &'a mut [V],
     density_rate: &'a mut [f64],
-    viscous_power: &'a mut [f64],
+    dissipation: &'a mut [DissipationRates],
 }
 
 impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
@@ -1072,7 +1090,7 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
             self.wall_grid,
             self.acceleration,
             self.density_rate,
-            self.viscous_power,
+            self.dissipation,
         );
         wall_seconds
     }

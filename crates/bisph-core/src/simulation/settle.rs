@@ -139,6 +139,7 @@ impl<V: Vector> Simulation<V> {
         self.last_dt = 0.0;
         self.wall_work = 0.0;
         self.viscous_dissipation = 0.0;
+        self.diffusion_dissipation = 0.0;
         self.forcing_work = 0.0;
         self.timings = Default::default();
         self.forget_pairs();

@@ -61,6 +61,7 @@ impl<V: Vector> Simulation<V> {
         self.wrap_positions();
         let power_before = self.wall_power;
         let viscous_before = self.viscous_power;
+        let diffusion_before = self.diffusion_power;
         self.time += dt;
         self.step += 1;
         self.last_dt = dt;
@@ -106,6 +107,7 @@ impl<V: Vector> Simulation<V> {
         }
         self.wall_work += half * (power_before + self.wall_power);
         self.viscous_dissipation += half * (viscous_before + self.viscous_power);
+        self.diffusion_dissipation += half * (diffusion_before + self.diffusion_power);
         self.refresh_pressure();
         self.last_iterations = 1;
         self.last_residue = 0.0;

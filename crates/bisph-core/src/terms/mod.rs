@@ -41,6 +41,16 @@ pub struct Operators<V> {
     pub wall_viscous: V,
 }
 
+/// The rates at which one particle's dissipative terms take energy from the fluid.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DissipationRates {
+    /// `-m_i u_i . a_i^visc`: the viscous Laplacian (paper 3, eq 18, with its wall shear).
+    pub viscous: f64,
+    /// `-m_i p_i D_i / rho_i^2`: the compressible energy `m_i e(rho_i)` that the density
+    /// diffusion `D_i` removes (`de/drho = p / rho^2`).
+    pub diffusion: f64,
+}
+
 /// Where the fluid sums find each particle's fluid neighbours. Both give the same neighbours
 /// in the same order with the same `r_ij` and kernel gradient factors, so the sums agree to
 /// the bit; one pair loop serves both ([`fluid_sums`]).
@@ -395,8 +405,8 @@ fn fluid_sums<
 }
 
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
-/// into `acceleration` and `density_rate`, in parallel; `viscous_power` receives each
-/// particle's viscous dissipation `-m_i u_i . a_i^visc` (zero without viscosity).
+/// into `acceleration` and `density_rate`, in parallel; `dissipation` receives each
+/// particle's [`DissipationRates`] (zero for a term that is off).
 #[allow(clippy::too_many_arguments)]
 pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -407,16 +417,12 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     wall_grid: &CellGrid<V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
-    viscous_power: &mut [f64],
+    dissipation: &mut [DissipationRates],
 ) {
     let body = model.gravity + model.body_force;
     acceleration
         .par_iter_mut()
-        .zip(
-            density_rate
-                .par_iter_mut()
-                .zip(viscous_power.par_iter_mut()),
-        )
+        .zip(density_rate.par_iter_mut().zip(dissipation.par_iter_mut()))
         .enumerate()
         .with_min_len(256)
         .for_each_init(KeptBlock::new, |kept, (i, (a, (drho, dissipation)))| {
@@ -430,6 +436,10 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
             } else {
                 -rho * (op.velocity_divergence + op.wall_velocity_divergence) + op.density_diffusion
             };
-            *dissipation = -fluid.mass[i] * fluid.velocity[i].dot(viscous);
+            let m = fluid.mass[i];
+            *dissipation = DissipationRates {
+                viscous: -m * fluid.velocity[i].dot(viscous),
+                diffusion: -m * fluid.pressure[i] * op.density_diffusion / (rho * rho),
+            };
         });
 }

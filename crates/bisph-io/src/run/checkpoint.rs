@@ -40,16 +40,18 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (7: a settling stage part-way; 6: the positions the explicit scheme's Verlet list was
+/// (8: the density diffusion's energy books, a ninth energy column; 7: a settling stage
+/// part-way; 6: the positions the explicit scheme's Verlet list was
 /// built at; 5: the midpoint first
 /// guess's earlier rates and step; 4: free rigid bodies and their CSV lengths; 3: without
 /// them).
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 /// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
 /// by it resumes with the first guess of a fresh start (last rates) for its first two steps;
 /// format 5 is format 6 without the Verlet list's build positions, so an explicit run with a
 /// skin written by it builds its list afresh at its first step; format 6 is format 7 without
-/// the settling stage (it was never written before `t = 0`).
+/// the settling stage (it was never written before `t = 0`); format 7 is format 8 without the
+/// density diffusion's books, which resume at zero (the energy rows read it as zero).
 pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -147,6 +149,10 @@ pub struct SimState<V: Vector> {
     pub viscous_power: f64,
     /// Cumulative work of the driving force.
     pub forcing_work: f64,
+    /// Cumulative energy removed by the density diffusion.
+    pub diffusion_dissipation: f64,
+    /// Diffusion dissipation rate at the last rate evaluation.
+    pub diffusion_power: f64,
     /// Current driving acceleration of the flux control.
     pub body_force: V,
     /// The flux controller's memory.
@@ -232,6 +238,8 @@ impl<V: Vector> SimState<V> {
         self.viscous_dissipation = sim.viscous_dissipation;
         self.viscous_power = sim.viscous_power;
         self.forcing_work = sim.forcing_work;
+        self.diffusion_dissipation = sim.diffusion_dissipation;
+        self.diffusion_power = sim.diffusion_power;
         self.body_force = sim.body_force;
         self.flux_history = sim.flux_history;
         self.last_iterations = sim.last_iterations;
@@ -455,6 +463,8 @@ impl<V: Vector> SimState<V> {
                 self.viscous_dissipation,
                 self.viscous_power,
                 self.forcing_work,
+                self.diffusion_dissipation,
+                self.diffusion_power,
                 self.flux_history.last,
                 self.flux_history.before_last,
                 self.flux_history.force,
@@ -554,6 +564,8 @@ impl<V: Vector> SimState<V> {
         sim.viscous_dissipation = self.viscous_dissipation;
         sim.viscous_power = self.viscous_power;
         sim.forcing_work = self.forcing_work;
+        sim.diffusion_dissipation = self.diffusion_dissipation;
+        sim.diffusion_power = self.diffusion_power;
         sim.body_force = self.body_force;
         sim.flux_history = self.flux_history;
         sim.last_iterations = self.last_iterations;
@@ -611,7 +623,16 @@ impl<V: Vector> SimState<V> {
 }
 
 /// Columns of `energy.csv` (and of the energy history a checkpoint keeps).
-pub const ENERGY_COLUMNS: usize = 8;
+pub const ENERGY_COLUMNS: usize = 9;
+
+/// Energy columns a checkpoint of layout `format` keeps (before format 8, without the last).
+fn energy_columns(format: u32) -> usize {
+    if format >= 8 {
+        ENERGY_COLUMNS
+    } else {
+        ENERGY_COLUMNS - 1
+    }
+}
 
 /// Exactly one vector, from a list.
 fn single<V: Vector>(v: Vec<V>) -> Result<V, String> {
@@ -916,8 +937,9 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     }
     w.f64(r.fluid_body_max);
     w.u64(c.history.len() as u64);
+    let columns = energy_columns(format);
     for row in &c.history {
-        for &x in row {
+        for &x in &row[..columns] {
             w.f64(x);
         }
     }
@@ -940,6 +962,10 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
                 ]);
             }
         }
+    }
+    if format >= 8 {
+        w.f64(s.diffusion_dissipation);
+        w.f64(s.diffusion_power);
     }
     w.0
 }
@@ -1042,11 +1068,12 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         run.body_csv_lengths.push(r.u64()?);
     }
     run.fluid_body_max = r.f64()?;
-    let n = r.len(8 * ENERGY_COLUMNS)?;
+    let columns = energy_columns(format);
+    let n = r.len(8 * columns)?;
     let mut history = Vec::with_capacity(n);
     for _ in 0..n {
         let mut row = [0.0; ENERGY_COLUMNS];
-        for x in row.iter_mut() {
+        for x in row[..columns].iter_mut() {
             *x = r.f64()?;
         }
         history.push(row);
@@ -1076,6 +1103,10 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         }
         Some(flag) => return Err(format!("settling flag {flag}, expected 0 or 1")),
     };
+    if format >= 8 {
+        s.diffusion_dissipation = r.f64()?;
+        s.diffusion_power = r.f64()?;
+    }
     if r.at != bytes.len() {
         return Err(format!(
             "{} bytes left over after the payload",
@@ -1243,7 +1274,9 @@ mod tests {
         c.sim.forcing_work = 0.75;
         c.sim.body_force = DVec2::new(1e-3, 0.0);
         c.sim.flux_history.last = 0.9;
-        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0]];
+        c.sim.diffusion_dissipation = 0.125;
+        c.sim.diffusion_power = -0.5;
+        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0, 9.0]];
         c.probe_history = vec![vec![0.0, 1.0], vec![0.1, 2.0]];
         c.settling = Some(SettleReport {
             steps: 321,
@@ -1283,14 +1316,34 @@ mod tests {
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads formats 4 to 7"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 8"),
             "{e}"
         );
     }
 
+    /// `c` as a layout before format 8 keeps it: no density diffusion books.
+    fn without_diffusion_books(mut c: Checkpoint<DVec2>) -> Checkpoint<DVec2> {
+        c.sim.diffusion_dissipation = 0.0;
+        c.sim.diffusion_power = 0.0;
+        for row in &mut c.history {
+            row[ENERGY_COLUMNS - 1] = 0.0;
+        }
+        c
+    }
+
+    #[test]
+    fn format_7_reads_without_the_diffusion_books() {
+        let c = sample();
+        let back = decode::<DVec2>(Path::new("v7.bin"), &encode_format(&c, 7)).unwrap();
+        assert_eq!(back.sim.diffusion_dissipation, 0.0);
+        assert_eq!(back.history[0][ENERGY_COLUMNS - 1], 0.0);
+        assert_eq!(back.settling, c.settling);
+        assert_eq!(encode(&back), encode(&without_diffusion_books(c)));
+    }
+
     #[test]
     fn format_6_reads_without_a_settling_stage() {
-        let mut c = sample();
+        let mut c = without_diffusion_books(sample());
         let back = decode::<DVec2>(Path::new("v6.bin"), &encode_format(&c, 6)).unwrap();
         assert_eq!(back.settling, None);
         c.settling = None;
@@ -1299,7 +1352,7 @@ mod tests {
 
     #[test]
     fn format_5_reads_without_the_neighbour_list() {
-        let mut c = sample();
+        let mut c = without_diffusion_books(sample());
         c.settling = None;
         c.sim.neighbour_origin = c.sim.fluid.position.clone();
         let back = decode::<DVec2>(Path::new("v5.bin"), &encode_format(&c, 5)).unwrap();
@@ -1310,7 +1363,7 @@ mod tests {
 
     #[test]
     fn format_4_reads_without_the_earlier_rates() {
-        let mut c = sample();
+        let mut c = without_diffusion_books(sample());
         c.settling = None;
         c.sim.earlier_dt = 1e-3;
         c.sim.fluid.earlier_acceleration = c.sim.fluid.acceleration.clone();

@@ -463,6 +463,7 @@ fn series_headers<V: CaseDim>(
                 "total",
                 "viscous_dissipation",
                 "forcing_work",
+                "diffusion_dissipation",
             ]
             .map(String::from)
             .to_vec(),
@@ -883,6 +884,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             e.total,
             e.viscous_dissipation,
             e.forcing_work,
+            e.diffusion_dissipation,
         ];
         if let Some(csv) = self.outputs.get(ENERGY) {
             csv.row(&row)?;
@@ -1167,7 +1169,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
 /// Writes `energy.png` from the energy `history` and, when there are probes, `probes.png`.
 fn write_plots(
     out: &Path,
-    history: &[[f64; 8]],
+    history: &[[f64; checkpoint::ENERGY_COLUMNS]],
     probe_header: &[String],
     probes: &[Vec<f64>],
 ) -> Result<(), OutputError> {
@@ -1182,8 +1184,9 @@ fn write_plots(
         "total",
         "viscous_dissipation",
         "forcing_work",
+        "diffusion_dissipation",
     ];
-    // Columns 6 and 7 only when they are used; `k + 1` is the column of `all[k]`.
+    // Columns 6 to 8 only when they are used; `k + 1` is the column of `all[k]`.
     let shown: Vec<(usize, &str)> = all
         .iter()
         .copied()
