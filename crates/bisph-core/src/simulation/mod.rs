@@ -24,6 +24,7 @@ use crate::terms::{
     compute_rates, particle_operators, DensityDiffusion, DiffusionForm, DissipationRates,
     FluidNeighbours, RateModel, Viscosity,
 };
+use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::Shepard;
 use crate::walls::usaw::Vertices;
@@ -225,6 +226,8 @@ pub struct Simulation<V: Vector> {
     pub last_residue: f64,
     /// Cell grid over the fluid particles.
     pub fluid_grid: CellGrid<V>,
+    /// Lower bounds of the particles' distances to fixed walls, kept with the Verlet list.
+    wall_clearance: WallClearance,
     /// Wall-clock seconds spent per phase since the start.
     pub timings: PhaseTimes,
     scratch: Scratch<V>,
@@ -279,6 +282,7 @@ impl<V: Vector> Simulation<V> {
             last_iterations: 0,
             last_residue: 0.0,
             fluid_grid: CellGrid::new(cell),
+            wall_clearance: WallClearance::default(),
             timings: PhaseTimes::default(),
             scratch: Scratch::default(),
         };
@@ -558,6 +562,7 @@ impl<V: Vector> Simulation<V> {
     pub(crate) fn rebuild_grid(&mut self, reorder: bool) {
         let start = Instant::now();
         self.scratch.candidates_valid = false;
+        self.wall_clearance.forget();
         self.fluid_grid.rebuild(&self.fluid.position);
         if reorder {
             let sorted = Instant::now();
@@ -602,7 +607,16 @@ impl<V: Vector> Simulation<V> {
             .rebuild(&self.fluid_grid, &self.fluid.position, radius);
         self.scratch.candidates_valid = true;
         self.scratch.use_candidates = true;
+        self.wall_clearance
+            .measure(&self.walls, &self.fluid.position, 0.5 * skin);
         self.timings.neighbours += start.elapsed().as_secs_f64();
+    }
+
+    /// Lower bounds of the particles' distances to the walls: with fixed walls and a Verlet
+    /// list, measured at its build and valid for the current positions; else none
+    /// ([`WallClearance::clear`] answers `false`).
+    pub fn wall_clearance(&self) -> &WallClearance {
+        &self.wall_clearance
     }
 
     /// The positions at which the Verlet list in use was built (`None`
@@ -634,7 +648,8 @@ impl<V: Vector> Simulation<V> {
         };
         let Some(origin) = origin.filter(|o| skin > 0.0 && fits(o)) else {
             self.scratch.candidates_valid = false;
-                self.fluid_grid.rebuild(&self.fluid.position);
+            self.wall_clearance.forget();
+            self.fluid_grid.rebuild(&self.fluid.position);
             return false;
         };
         self.fluid_grid.rebuild(origin);
@@ -643,6 +658,7 @@ impl<V: Vector> Simulation<V> {
             .candidates
             .rebuild(&self.fluid_grid, origin, radius);
         self.scratch.candidates_valid = true;
+        self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
             self.fluid_grid.rebuild(&self.fluid.position);
         }

@@ -29,6 +29,7 @@ impl<V: Vector> Simulation<V> {
                 self.wall_work += elastic_bounce(
                     &self.walls.elements,
                     &self.walls.grid,
+                    &self.wall_clearance,
                     &f.position,
                     &f.mass,
                     &mut f.velocity,

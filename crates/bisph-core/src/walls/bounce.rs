@@ -8,6 +8,7 @@
 //! change is booked as wall work. (Paper 1, section 4.1, mentions this device; the authors'
 //! code applies it by default.)
 
+use super::clearance::WallClearance;
 use super::BoundaryElements;
 use crate::dim::Vector;
 use crate::neighbours::CellGrid;
@@ -20,12 +21,15 @@ use rayon::prelude::*;
 /// relative to the element is reflected. `end`, when given (midpoint scheme), is the
 /// end-of-step velocity: its relative normal component is reflected too when it points into
 /// the wall, which keeps its magnitude. Without `end`, `drift` is also the particle velocity.
+/// Particles that `clearance` shows farther from every wall than the drift takes them are not
+/// searched (a bounce off element `j` needs `|x - c_j| - reach_j <= dt (drift - U_j) . n_j`).
 /// Returns the kinetic energy the particles lost (energy given to moving walls), summed in a
 /// fixed order.
 #[allow(clippy::too_many_arguments)]
 pub fn elastic_bounce<V: Vector>(
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
+    clearance: &WallClearance,
     position: &[V],
     mass: &[f64],
     drift: &mut [V],
@@ -47,7 +51,7 @@ pub fn elastic_bounce<V: Vector>(
     };
     let visit = |i: usize, d: &mut V, mut e: Option<&mut V>, lost: &mut f64| {
         let x = position[i];
-        if grid.no_candidates(x) {
+        if grid.no_candidates(x) || clearance.clear(i, dt * d.length()) {
             // No element near: nothing to reflect (`lost` stays 0).
             return;
         }

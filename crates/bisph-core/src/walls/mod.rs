@@ -4,6 +4,7 @@
 //! wall, as in paper 1. Paper 3 uses the opposite sign; convert at its edges.
 
 pub mod bounce;
+pub mod clearance;
 pub mod energy_bi;
 pub mod gamma_cache;
 pub mod geometric_shepard;

@@ -374,6 +374,7 @@ impl Watch {
         let behind_search = (support - e.max_reach).max(0.5 * support);
         let index = &self.previous_index;
         let moving = sim.walls.has_moving_bodies();
+        let clearance = sim.wall_clearance();
         let bad = violators(sim, |i| {
             let p1 = f.position[i];
             // The position before the step (the particle itself when it has none).
@@ -382,6 +383,12 @@ impl Watch {
                 .and_then(|&k| previous.fluid.position.get(k as usize))
                 .copied()
                 .unwrap_or(p1);
+            // A path through an element ends within the step's length of the wall, and a
+            // particle at most `tolerance` behind a wall before the step lies at most that
+            // plus the step's length from it after: farther, neither test can trip.
+            if clearance.clear(i, (p1 - p0).length() + tolerance) {
+                return None;
+            }
             let radius = ((p1 - p0).length() + e.max_reach).min(support);
             let mut depth: Option<f64> = None;
             sim.walls

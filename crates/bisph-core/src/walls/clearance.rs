@@ -1,0 +1,129 @@
+//! Lower bounds of the particles' distances to fixed walls, measured when the explicit
+//! scheme's Verlet list is built and valid while it holds (no particle has moved more than
+//! half the skin since). They spare the elastic bounce and the wall-crossing watch the
+//! element search for particles that no wall can concern within a step.
+
+use super::Walls;
+use crate::dim::Vector;
+use rayon::prelude::*;
+
+/// Relative allowance on an element's reach (the bounce's own test allows `1e-6`).
+const REACH_ALLOWANCE: f64 = 1e-5;
+
+/// Per particle, a distance below which no wall surface comes (see the module documentation).
+#[derive(Clone, Debug, Default)]
+pub struct WallClearance {
+    /// `min_j (|x_i - c_j| - reach_j)` over the elements in the wall-grid cells around `x_i`
+    /// at the measurement, at most one cell less the largest reach (no farther element can
+    /// come closer), each reach widened by [`REACH_ALLOWANCE`].
+    lower_bound: Vec<f64>,
+    /// How far a particle may have moved since the measurement.
+    slack: f64,
+    measured: bool,
+}
+
+impl WallClearance {
+    /// Measures the bounds at `points`; `slack` is how far a particle may move before the
+    /// caller measures again or [`WallClearance::forget`]s them. Walls that may move get no
+    /// bounds.
+    pub fn measure<V: Vector>(&mut self, walls: &Walls<V>, points: &[V], slack: f64) {
+        if walls.has_moving_bodies() {
+            self.forget();
+            return;
+        }
+        let (elements, grid) = (&walls.elements, &walls.grid);
+        let reach = |j: usize| elements.reach[j] * (1.0 + REACH_ALLOWANCE);
+        let far = grid.cell_size() - elements.max_reach * (1.0 + REACH_ALLOWANCE);
+        self.lower_bound.resize(points.len(), 0.0);
+        self.lower_bound
+            .par_iter_mut()
+            .zip(points.par_iter())
+            .with_min_len(1024)
+            .for_each(|(bound, &x)| {
+                *bound = far;
+                if grid.no_candidates(x) {
+                    return;
+                }
+                grid.for_each_candidate_shifted(x, |j, shift| {
+                    let d = (x - elements.centre[j] - shift).length() - reach(j);
+                    *bound = bound.min(d);
+                });
+            });
+        self.slack = slack;
+        self.measured = !elements.is_empty();
+    }
+
+    /// Drops the bounds (the particles were reordered, or the walls may move).
+    pub fn forget(&mut self) {
+        self.measured = false;
+    }
+
+    /// `true` when particle `i` (in the memory order of the measurement) is provably farther
+    /// than `distance` from every wall surface; `false` when that is not known.
+    #[inline(always)]
+    pub fn clear(&self, i: usize, distance: f64) -> bool {
+        self.measured && self.lower_bound[i] - self.slack > distance
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bodies::Body;
+    use crate::geometry::box_elements_3d;
+    use crate::walls::BoundaryElements;
+    use glam::DVec3;
+
+    /// A unit box open at the top, in square elements of side 0.1, on a grid of cells 0.25.
+    fn open_box() -> Walls<DVec3> {
+        let mut e = BoundaryElements::default();
+        for s in box_elements_3d(DVec3::ZERO, DVec3::ONE, &["+z".to_string()], 0.1) {
+            e.push(s.centre, s.normal, s.area, 0, &s.corners);
+        }
+        Walls::new(e, vec![Body::fixed("walls")], 0.25)
+    }
+
+    /// Distance from `x` to the nearest element, each an axis-aligned rectangle.
+    fn distance_to_elements(walls: &Walls<DVec3>, x: DVec3) -> f64 {
+        (0..walls.elements.len())
+            .map(|j| {
+                let corners = walls.elements.current_corners(j);
+                let lo = corners.iter().fold(DVec3::INFINITY, |a, &c| a.min(c));
+                let hi = corners.iter().fold(DVec3::NEG_INFINITY, |a, &c| a.max(c));
+                (x - x.clamp(lo, hi)).length()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The bounds never exceed the distance to the walls, at points inside, outside and on
+    /// them; far inside they are positive, and without a measurement nothing is clear.
+    #[test]
+    fn bounds_stay_below_the_distance_to_the_walls() {
+        let walls = open_box();
+        let points: Vec<DVec3> = (0..4000)
+            .map(|k| {
+                let f = |m: u64| ((k as u64 * m) % 1009) as f64 / 1009.0;
+                DVec3::new(f(389), f(677), f(853)) * 1.4 - DVec3::splat(0.2)
+            })
+            .collect();
+        let mut clearance = WallClearance::default();
+        assert!(!clearance.clear(0, 0.0));
+        clearance.measure(&walls, &points, 0.0);
+        let mut clear = 0;
+        for (i, &x) in points.iter().enumerate() {
+            let distance = distance_to_elements(&walls, x);
+            assert!(
+                clearance.lower_bound[i] <= distance,
+                "{x}: bound {} above the distance {distance}",
+                clearance.lower_bound[i]
+            );
+            clear += usize::from(clearance.clear(i, 0.05));
+        }
+        assert!(clear > 400, "{clear} points clear by 0.05");
+        let centre = [DVec3::splat(0.5)];
+        clearance.measure(&walls, &centre, 0.1);
+        assert!(clearance.clear(0, 0.05) && !clearance.clear(0, 0.2));
+        clearance.forget();
+        assert!(!clearance.clear(0, 0.0));
+    }
+}
