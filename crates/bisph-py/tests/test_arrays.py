@@ -91,10 +91,11 @@ def test_energy_bodies_and_probes():
     e = sim.energy
     assert set(e) == {
         "kinetic", "compressible", "potential", "wall_work", "total",
-        "viscous_dissipation", "forcing_work",
+        "viscous_dissipation", "forcing_work", "diffusion_dissipation",
     }
     parts = e["kinetic"] + e["compressible"] + e["potential"] + e["wall_work"]
-    assert e["total"] == pytest.approx(parts + e["viscous_dissipation"] - e["forcing_work"])
+    dissipated = e["viscous_dissipation"] + e["diffusion_dissipation"]
+    assert e["total"] == pytest.approx(parts + dissipated - e["forcing_work"])
     assert e["kinetic"] == 0.0
     sim.run(until=0.05)
     assert sim.energy["kinetic"] > 0  # J per m depth: the column has started to fall
