@@ -59,10 +59,15 @@ impl WallClearance {
     }
 
     /// `true` when particle `i` (in the memory order of the measurement) is provably farther
-    /// than `distance` from every wall surface; `false` when that is not known.
+    /// than `distance` from every wall surface; `false` when that is not known (no
+    /// measurement, or no particle `i` in it).
     #[inline(always)]
     pub fn clear(&self, i: usize, distance: f64) -> bool {
-        self.measured && self.lower_bound[i] - self.slack > distance
+        self.measured
+            && self
+                .lower_bound
+                .get(i)
+                .is_some_and(|&bound| bound - self.slack > distance)
     }
 }
 
