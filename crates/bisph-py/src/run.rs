@@ -6,8 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBool;
 use rayon::ThreadPool;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, RecvTimeoutError};
-use std::sync::Mutex;
+use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
 /// How often the calling thread looks for signals while the work runs.
@@ -58,6 +57,20 @@ pub struct Stop {
     /// Read by the time loop between steps.
     pub flag: AtomicBool,
     error: Mutex<Option<PyErr>>,
+    /// What the watching thread is told between its polls.
+    watch: Mutex<Watch>,
+    /// Signalled whenever `watch` changes.
+    watch_changed: Condvar,
+}
+
+/// The hand-off between the work and the thread that watches for signals.
+#[derive(Default)]
+struct Watch {
+    /// A progress callable ran (and may have raised a signal, e.g. by
+    /// `_thread.interrupt_main()`); the work waits for the signal check that follows.
+    check_asked: bool,
+    /// The work has ended (or unwound).
+    done: bool,
 }
 
 impl Stop {
@@ -80,6 +93,8 @@ impl Stop {
     }
 
     /// Calls the progress callable (if any) with `p`; an exception it raises stops the work.
+    /// A signal raised meanwhile is checked before the next step, so the work stops right
+    /// after the step that reported it.
     pub fn report(&self, progress: Option<&Py<PyAny>>, p: Progress) {
         let Some(callable) = progress else { return };
         Python::attach(|py| {
@@ -87,6 +102,64 @@ impl Stop {
                 self.fail(e);
             }
         });
+        if !self.requested() {
+            self.await_signal_check();
+        }
+    }
+
+    fn lock_watch(&self) -> MutexGuard<'_, Watch> {
+        self.watch.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Asks the watching thread for a signal check and waits for it; after `SIGNAL_POLL` the
+    /// work goes on regardless (no thread may be watching).
+    fn await_signal_check(&self) {
+        let mut watch = self.lock_watch();
+        watch.check_asked = true;
+        self.watch_changed.notify_all();
+        let _ = self
+            .watch_changed
+            .wait_timeout_while(watch, SIGNAL_POLL, |w| w.check_asked && !w.done);
+    }
+
+    /// Tells the watching thread that the work has ended.
+    fn finish(&self) {
+        self.lock_watch().done = true;
+        self.watch_changed.notify_all();
+    }
+
+    /// Watches for signals until the work ends: every `SIGNAL_POLL`, and at once when a
+    /// progress call asks. A raised signal stops the work.
+    fn watch_signals(&self) {
+        let mut watch = self.lock_watch();
+        while !watch.done {
+            watch = self
+                .watch_changed
+                .wait_timeout_while(watch, SIGNAL_POLL, |w| !w.check_asked && !w.done)
+                .unwrap_or_else(PoisonError::into_inner)
+                .0;
+            if watch.done {
+                break;
+            }
+            drop(watch);
+            if !self.requested() {
+                if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    self.fail(e);
+                }
+            }
+            watch = self.lock_watch();
+            watch.check_asked = false;
+            self.watch_changed.notify_all();
+        }
+    }
+}
+
+/// Marks the work as ended when dropped, also when it unwinds from a panic.
+struct Finished<'a>(&'a Stop);
+
+impl Drop for Finished<'_> {
+    fn drop(&mut self) {
+        self.0.finish();
     }
 }
 
@@ -110,8 +183,8 @@ pub fn progress_callable(progress: Option<&Bound<'_, PyAny>>) -> PyResult<Option
 }
 
 /// Runs `work` with the GIL released: on `pool` when given (else rayon's global pool) in a
-/// worker thread, while this thread checks for signals every few milliseconds and sets
-/// `stop` when a handler raises (Ctrl-C raises KeyboardInterrupt). `work` reads `stop`
+/// worker thread, while this thread checks for signals every few milliseconds and after each
+/// progress call, and sets `stop` when a handler raises (Ctrl-C raises KeyboardInterrupt). `work` reads `stop`
 /// between steps, so it ends at a step boundary and leaves a usable state.
 pub fn run_released<T: Send>(
     py: Python<'_>,
@@ -119,25 +192,17 @@ pub fn run_released<T: Send>(
     stop: &Stop,
     work: impl FnOnce() -> T + Send,
 ) -> T {
+    *stop.lock_watch() = Watch::default();
     py.detach(|| {
         std::thread::scope(|scope| {
-            let (done, finished) = channel::<()>();
             let worker = scope.spawn(move || {
-                let result = match pool {
+                let _finished = Finished(stop);
+                match pool {
                     Some(pool) => pool.install(work),
                     None => work(),
-                };
-                // The receiver lives until the join below.
-                let _ = done.send(());
-                result
-            });
-            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
-                if !stop.requested() {
-                    if let Err(e) = Python::attach(|py| py.check_signals()) {
-                        stop.fail(e);
-                    }
                 }
-            }
+            });
+            stop.watch_signals();
             match worker.join() {
                 Ok(result) => result,
                 Err(panic) => std::panic::resume_unwind(panic),
