@@ -1,6 +1,7 @@
 //! Energy bookkeeping (paper 1, section 4): kinetic, compressible, potential and the
 //! cumulative work the fluid did on walls and bodies.
 
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
 use crate::eos::Eos;
 use crate::particles::Fluid;
@@ -30,15 +31,22 @@ pub struct EnergyBudget {
     pub total: f64,
 }
 
-/// Sums `f(i)` for `i < n` in fixed chunks combined in order: the same bits for any number
-/// of threads.
+/// Sums `f(i)` for `i < n` exactly, rounded once ([`ExactSum`]): the same bits for any
+/// number of threads, any order of the terms, and any split of them over parts.
 pub fn deterministic_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
     const CHUNK: usize = 4096;
-    let partial: Vec<f64> = (0..n.div_ceil(CHUNK))
+    (0..n.div_ceil(CHUNK))
         .into_par_iter()
-        .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).map(&f).sum::<f64>())
-        .collect();
-    partial.iter().sum()
+        .map(|c| {
+            let mut sum = ExactSum::new();
+            sum.add_all((c * CHUNK..((c + 1) * CHUNK).min(n)).map(&f));
+            sum
+        })
+        .reduce(ExactSum::new, |mut a, b| {
+            a.merge(&b);
+            a
+        })
+        .value()
 }
 
 /// The fluid's kinetic, compressible and potential energies.
@@ -62,9 +70,49 @@ pub fn energy_scale<V: Vector>(fluid: &Fluid<V>, eos: &Eos, gravity: V) -> f64 {
     let available: f64 = if heights.is_empty() {
         0.0
     } else {
-        (0..fluid.len())
-            .map(|i| fluid.mass[i] * (heights[i] - lowest))
-            .sum()
+        deterministic_sum(fluid.len(), |i| fluid.mass[i] * (heights[i] - lowest))
     };
     kinetic + compressible.abs() + available
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Terms of mixed signs and magnitudes, where a running sum depends on the order.
+    fn terms(n: usize) -> Vec<f64> {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        (0..n)
+            .map(|k| {
+                s = s
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                let unit = (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                unit * 10f64.powi((k % 17) as i32 - 8)
+            })
+            .collect()
+    }
+
+    /// The same bits for the terms in any order and for any part of them added in any
+    /// grouping: the sum is exact, rounded once.
+    #[test]
+    fn deterministic_sums_do_not_depend_on_the_order_of_the_terms() {
+        let t = terms(20_000);
+        let forward = deterministic_sum(t.len(), |i| t[i]);
+        let backward = deterministic_sum(t.len(), |i| t[t.len() - 1 - i]);
+        let strided = deterministic_sum(t.len(), |i| t[(i * 7919) % t.len()]);
+        assert_eq!(forward.to_bits(), backward.to_bits());
+        assert_eq!(forward.to_bits(), strided.to_bits());
+        // Two parts summed apart and merged give the whole's bits.
+        let mut parts = ExactSum::new();
+        parts.add_all(t[..7_000].iter().copied());
+        let mut rest = ExactSum::new();
+        rest.add_all(t[7_000..].iter().copied());
+        parts.merge(&rest);
+        assert_eq!(forward.to_bits(), parts.value().to_bits());
+        // Exact where a running sum loses the small terms.
+        let cancelling = [1.0, 1e100, 1.0, -1e100];
+        assert_eq!(cancelling.iter().sum::<f64>(), 0.0);
+        assert_eq!(deterministic_sum(4, |i| cancelling[i]), 2.0);
+    }
 }

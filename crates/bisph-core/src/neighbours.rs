@@ -88,9 +88,19 @@ impl<V: Vector> Periodicity<V> {
 
 /// Cell lists over a set of points: `items[cell_start[c]..cell_start[c + 1]]` are the points
 /// in cell `c`.
+///
+/// The cells are those of one fixed lattice, whatever the points: along an open axis, cell
+/// `m` holds the coordinates `x` with `floor(x / cell) = m`; along a periodic axis, the
+/// period is cut into whole cells from its lower end. The grid covers the lattice cells from
+/// `base` on that hold points, so a point lies in the same lattice cell in any set of points
+/// it is part of.
 #[derive(Clone, Debug, Default)]
 pub struct CellGrid<V: Vector> {
-    origin: V,
+    /// Where the lattice starts along each axis: zero along open axes, the lower end of the
+    /// period along periodic ones.
+    anchor: V,
+    /// Lattice index of the grid's first cell along each axis.
+    base: [i64; 3],
     inv_cell: f64,
     /// Inverse cell side per axis (periodic axes have cells stretched to fit the period).
     inv_cells: [f64; 3],
@@ -119,7 +129,8 @@ impl<V: Vector> CellGrid<V> {
     /// An empty grid with cells of side `cell_size`.
     pub fn new(cell_size: f64) -> Self {
         CellGrid {
-            origin: V::ZERO,
+            anchor: V::ZERO,
+            base: [0; 3],
             inv_cell: 1.0 / cell_size,
             inv_cells: [1.0 / cell_size; 3],
             cell: cell_size,
@@ -152,6 +163,7 @@ impl<V: Vector> CellGrid<V> {
                     ));
                 }
                 grid.inv_cells[k] = cells / l;
+                grid.anchor.set(k, period.min.get(k));
             }
         }
         grid.periodic = period.any();
@@ -170,8 +182,9 @@ impl<V: Vector> CellGrid<V> {
     }
 
     /// Point indices in the storage order (by row of cells, rows along a Morton curve over
-    /// `(y, z)`, cells along `x` within a row, each cell's points in increasing index): the
-    /// permutation that reorders particles so that runs of cells are contiguous in memory.
+    /// `(y, z)`, cells along `x` within a row, each cell's points in increasing key, see
+    /// [`CellGrid::rebuild_keyed`]): the permutation that reorders particles so that runs of
+    /// cells are contiguous in memory.
     pub fn sorted_items(&self) -> &[u32] {
         &self.items
     }
@@ -204,8 +217,30 @@ impl<V: Vector> CellGrid<V> {
         self.row_dims = self.dims;
     }
 
-    /// Rebuilds the grid for `points` (all of which must be finite).
+    /// Rebuilds the grid for `points` (all of which must be finite), each cell's points in
+    /// increasing index.
     pub fn rebuild(&mut self, points: &[V]) {
+        self.rebuild_cells(points);
+    }
+
+    /// Rebuilds the grid for `points` (all of which must be finite), each cell's points in
+    /// increasing `keys` (one per point, all different): with a global identity as the key,
+    /// every query meets its neighbours in an order that depends neither on where the points
+    /// are stored nor on which other points the grid holds, only on the lattice cells and
+    /// the keys.
+    pub fn rebuild_keyed(&mut self, points: &[V], keys: &[u32]) {
+        assert_eq!(points.len(), keys.len(), "one key per point");
+        self.rebuild_cells(points);
+        let (starts, items) = (&self.cell_start, &mut self.items);
+        for cell in starts.windows(2) {
+            let slots = &mut items[cell[0] as usize..cell[1] as usize];
+            if slots.len() > 1 {
+                slots.sort_unstable_by_key(|&i| keys[i as usize]);
+            }
+        }
+    }
+
+    fn rebuild_cells(&mut self, points: &[V]) {
         let n = points.len();
         self.contiguous = false;
         if n == 0 {
@@ -222,15 +257,16 @@ impl<V: Vector> CellGrid<V> {
             hi = hi.max_by_component(p);
         }
         let mut dims = [1usize; 3];
+        let mut base = [0i64; 3];
         for (k, d) in dims.iter_mut().enumerate().take(V::DIM) {
             if self.period.is_periodic(k) {
-                lo.set(k, self.period.min.get(k));
                 *d = (self.period.length.get(k) * self.inv_cells[k]).round() as usize;
             } else {
-                *d = ((hi.get(k) - lo.get(k)) * self.inv_cell).floor() as usize + 1;
+                base[k] = floor_to_i64(lo.get(k) * self.inv_cell);
+                *d = (floor_to_i64(hi.get(k) * self.inv_cell) - base[k]) as usize + 1;
             }
         }
-        self.origin = lo;
+        self.base = base;
         self.dims = dims;
         self.rank_rows();
         let cells = dims[0] * dims[1] * dims[2];
@@ -280,7 +316,7 @@ impl<V: Vector> CellGrid<V> {
     fn coords(&self, p: V) -> [i64; 3] {
         let mut c = [0i64; 3];
         for (k, ck) in c.iter_mut().enumerate().take(V::DIM) {
-            *ck = floor_to_i64((p.get(k) - self.origin.get(k)) * self.inv_cells[k]);
+            *ck = floor_to_i64((p.get(k) - self.anchor.get(k)) * self.inv_cells[k]) - self.base[k];
         }
         c
     }
@@ -1021,6 +1057,67 @@ mod tests {
             .map(|c| DVec3::new(c[0], c[1], 0.3 * c[2]))
             .collect();
         check(p3, 0.15);
+    }
+
+    /// The neighbours of a point, as keys, in the order a keyed grid visits them.
+    fn keyed_order<V: Vector>(
+        grid: &CellGrid<V>,
+        points: &[V],
+        keys: &[u32],
+        x: V,
+        radius: f64,
+    ) -> Vec<u32> {
+        let mut order = Vec::new();
+        grid.for_each_neighbour(x, points, radius, |j, _, _| order.push(keys[j]));
+        order
+    }
+
+    /// A keyed grid visits a point's neighbours in the same order, with the same offsets,
+    /// whatever the storage order of the points and whichever other points it holds: a grid
+    /// over a shuffled band of the points (`0.3 - radius <= x < 0.6 + radius`) agrees with
+    /// the grid over all of them for every query in `0.3 <= x < 0.6`, in 2-D, in 3-D, and
+    /// across a periodic axis.
+    fn check_parts_agree<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let keys: Vec<u32> = (0..points.len() as u32).collect();
+        let mut whole = CellGrid::with_period(radius, period).unwrap();
+        whole.rebuild_keyed(&points, &keys);
+        // A part in shuffled order: every third point first, then the others backwards.
+        let inside = |p: &V| (0.3 - radius..0.6 + radius).contains(&p.get(0));
+        let mut order: Vec<u32> = (0..points.len() as u32).step_by(3).collect();
+        order.extend((0..points.len() as u32).rev().filter(|k| k % 3 != 0));
+        order.retain(|&k| inside(&points[k as usize]));
+        let part_points: Vec<V> = order.iter().map(|&k| points[k as usize]).collect();
+        let mut part = CellGrid::with_period(radius, period).unwrap();
+        part.rebuild_keyed(&part_points, &order);
+        let mut checked = 0;
+        for &x in points.iter().filter(|p| (0.3..0.6).contains(&p.get(0))) {
+            let a = keyed_order(&whole, &points, &keys, x, radius);
+            let b = keyed_order(&part, &part_points, &order, x, radius);
+            assert_eq!(a, b, "neighbour order of {:?}", x.to_xyz());
+            let mut offsets = (Vec::new(), Vec::new());
+            whole.for_each_neighbour(x, &points, radius, |_, d, _| offsets.0.push(d));
+            part.for_each_neighbour(x, &part_points, radius, |_, d, _| offsets.1.push(d));
+            assert!(offsets.0 == offsets.1);
+            checked += a.len();
+        }
+        assert!(checked > points.len(), "test must see real neighbours");
+    }
+
+    #[test]
+    fn keyed_grids_order_neighbours_alike_in_any_part() {
+        let r: Vec<f64> = pseudo_random(6000, 11).collect();
+        let p2: Vec<DVec2> = r.chunks(2).map(|c| DVec2::new(c[0], c[1] - 0.3)).collect();
+        check_parts_agree(p2.clone(), 0.07, Periodicity::none());
+        let periodic = Periodicity {
+            min: DVec2::new(0.0, -0.3),
+            length: DVec2::new(0.0, 1.0),
+        };
+        check_parts_agree(p2, 0.07, periodic);
+        let p3: Vec<DVec3> = r
+            .chunks(3)
+            .map(|c| DVec3::new(c[0], c[1] + 2.0, 0.3 * c[2] - 1.0))
+            .collect();
+        check_parts_agree(p3, 0.15, Periodicity::none());
     }
 
     /// Points along the border of the unit square (a wall), queried from inside and

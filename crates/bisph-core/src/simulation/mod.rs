@@ -563,7 +563,8 @@ impl<V: Vector> Simulation<V> {
         let start = Instant::now();
         self.scratch.candidates_valid = false;
         self.wall_clearance.forget();
-        self.fluid_grid.rebuild(&self.fluid.position);
+        self.fluid_grid
+            .rebuild_keyed(&self.fluid.position, &self.fluid.id);
         if reorder {
             let sorted = Instant::now();
             // Into the grid's storage order: the grid stays valid, its slots now contiguous.
@@ -593,7 +594,8 @@ impl<V: Vector> Simulation<V> {
         let s = &mut self.scratch;
         if s.candidates_valid && s.candidates.holds(&self.fluid.position, 0.5 * skin) {
             if self.config.periodicity.any() {
-                self.fluid_grid.rebuild(&self.fluid.position);
+                self.fluid_grid
+                    .rebuild_keyed(&self.fluid.position, &self.fluid.id);
             }
             s.use_candidates = true;
             self.timings.neighbours += start.elapsed().as_secs_f64();
@@ -649,10 +651,11 @@ impl<V: Vector> Simulation<V> {
         let Some(origin) = origin.filter(|o| skin > 0.0 && fits(o)) else {
             self.scratch.candidates_valid = false;
             self.wall_clearance.forget();
-            self.fluid_grid.rebuild(&self.fluid.position);
+            self.fluid_grid
+                .rebuild_keyed(&self.fluid.position, &self.fluid.id);
             return false;
         };
-        self.fluid_grid.rebuild(origin);
+        self.fluid_grid.rebuild_keyed(origin, &self.fluid.id);
         let radius = self.config.kernel.support + skin;
         self.scratch
             .candidates
@@ -660,7 +663,8 @@ impl<V: Vector> Simulation<V> {
         self.scratch.candidates_valid = true;
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
-            self.fluid_grid.rebuild(&self.fluid.position);
+            self.fluid_grid
+                .rebuild_keyed(&self.fluid.position, &self.fluid.id);
         }
         true
     }

@@ -102,7 +102,7 @@ impl<V: Vector> Simulation<V> {
         // A copy of the fluid grid (its periodic axes included), so the simulation's own
         // neighbour data stays as it is.
         let mut grid = self.fluid_grid.clone();
-        grid.rebuild(&f.position);
+        grid.rebuild_keyed(&f.position, &f.id);
         let kernel = &self.config.kernel;
         let top = f
             .position
