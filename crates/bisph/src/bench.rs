@@ -23,10 +23,11 @@
 //!
 //! Suite `walls`: the seed papers' wall-bounded and implicit runs with their own settings:
 //! SPHERIC test 2 (3-D, `bi` walls with geometric gamma, delta-SPH, Verlet) at 50k and 100k
-//! particles, and the Lobovsky dam break (2-D, energy walls, the semi-implicit midpoint
-//! scheme, which evaluates the rates several times per step) at 50k and 200k. Each is refined
-//! to the particle count from its shipped case file, early in the flow (the first steps
-//! after release).
+//! particles, the Lobovsky dam break (2-D, energy walls, the semi-implicit midpoint scheme,
+//! which evaluates the rates several times per step) at 50k and 200k, and the Apollo water
+//! landing (3-D, energy walls, midpoint scheme with the capsule as a free body) at 62.5k.
+//! Each is refined to the particle count from its shipped case file, early in the flow (the
+//! first steps after release; the capsule starts with its lowest point on the water).
 
 use bisph_core::Simulation;
 use bisph_io::case::{build_simulation, CaseDim};
@@ -42,6 +43,7 @@ const DAM_BREAK_3D: &str = include_str!("../../../cases/dam-break-3d.toml");
 /// The seed papers' wall-bounded cases of the `walls` suite.
 const SPHERIC_TEST2: &str = include_str!("../../../cases/spheric-test2.toml");
 const LOBOVSKY: &str = include_str!("../../../cases/lobovsky-dam-break.toml");
+const APOLLO: &str = include_str!("../../../cases/apollo.toml");
 
 /// Water volumes of the two dam breaks: 0.6 x 0.3 m and 0.6 x 0.3 x 0.3 m.
 const WATER_AREA_2D: f64 = 0.18;
@@ -51,6 +53,11 @@ const TANK_AREA: f64 = 0.0828;
 /// Water of SPHERIC test 2 (1.228 x 1 x 0.55 m) and of the Lobovsky dam break (0.6 x 0.3 m).
 const SPHERIC_WATER: f64 = 1.228 * 0.55;
 const LOBOVSKY_WATER: f64 = 0.18;
+/// Water of the Apollo pool (16 x 16 x 8 m).
+const APOLLO_WATER: f64 = 2048.0;
+/// Height of the Apollo capsule's centre (its `translate`) that puts its lowest point on the
+/// water surface (z = 8): `8 + R (1 - cos 12 deg)` with the heat shield's radius R = 4.491 m.
+const APOLLO_TOUCHING: f64 = 8.098_139;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Suite {
@@ -63,7 +70,7 @@ pub enum Suite {
     /// Shepard factor cost on the still-water tank: discrete, geometric, none; 10k and 50k.
     Shepard,
     /// SPHERIC test 2 (3-D, bi + geometric) at 50k and 100k; Lobovsky (2-D, midpoint) at 50k
-    /// and 200k.
+    /// and 200k; Apollo (3-D, midpoint, free body) at 62.5k.
     Walls,
 }
 
@@ -82,22 +89,25 @@ enum BenchCase {
     SphericTest2,
     /// The Lobovsky dam break as shipped (2-D, midpoint).
     Lobovsky,
+    /// The Apollo water landing as shipped (3-D, midpoint, free body).
+    Apollo,
 }
 
 impl BenchCase {
-    const ALL: [(BenchCase, &'static str); 6] = [
+    const ALL: [(BenchCase, &'static str); 7] = [
         (BenchCase::DamBreak, "dam-break"),
         (BenchCase::TankDiscrete, "tank-discrete"),
         (BenchCase::TankGeometric, "tank-geometric"),
         (BenchCase::TankEnergy, "tank-energy"),
         (BenchCase::SphericTest2, "spheric-test2"),
         (BenchCase::Lobovsky, "lobovsky"),
+        (BenchCase::Apollo, "apollo"),
     ];
 
     /// The dimension of a case that has one of its own.
     fn own_dim(self) -> Option<u8> {
         match self {
-            BenchCase::SphericTest2 => Some(3),
+            BenchCase::SphericTest2 | BenchCase::Apollo => Some(3),
             BenchCase::Lobovsky => Some(2),
             _ => None,
         }
@@ -250,6 +260,7 @@ pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
                 (BenchCase::SphericTest2, 3, 100_000),
                 (BenchCase::Lobovsky, 2, 50_000),
                 (BenchCase::Lobovsky, 2, 200_000),
+                (BenchCase::Apollo, 3, 62_500),
             ],
         }
     };
@@ -363,8 +374,9 @@ fn summarise(configs: &[Config], results: &[Value], reference: Option<f64>) -> V
         (median, values[0], values[values.len() - 1])
     };
     println!(
-        "\nover {} runs each: {:>9} {:>3} {:>6} {:>7} {:>14} {:>12} {:>12} {:>8} {:>22}",
+        "\nover {} runs each: {:>14} {:>9} {:>3} {:>6} {:>7} {:>14} {:>12} {:>12} {:>8} {:>22}",
         results.len() / configs.len().max(1),
+        "case",
         "particles",
         "dim",
         "h/dx",
@@ -401,7 +413,8 @@ fn summarise(configs: &[Config], results: &[Value], reference: Option<f64>) -> V
             )
         });
         println!(
-            "{:>29} {:>3} {:>6.3} {:>7} {:>14.3e} {:>12.3e} {:>12.3e} {:>8} {:>22}",
+            "{:>34} {:>9} {:>3} {:>6.3} {:>7} {:>14.3e} {:>12.3e} {:>12.3e} {:>8} {:>22}",
+            config.case.name(),
             config.particles,
             config.dim,
             config.h_over_dx,
@@ -469,6 +482,7 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         (BenchCase::DamBreak, _) => (DAM_BREAK_3D, (WATER_VOLUME_3D / n).cbrt()),
         (BenchCase::SphericTest2, _) => (SPHERIC_TEST2, (SPHERIC_WATER / n).cbrt()),
         (BenchCase::Lobovsky, _) => (LOBOVSKY, (LOBOVSKY_WATER / n).sqrt()),
+        (BenchCase::Apollo, _) => (APOLLO, (APOLLO_WATER / n).cbrt()),
         _ => (bisph_validate::paper2::TANK, (TANK_AREA / n).sqrt()),
     };
     if let Some(d) = config.case.own_dim().filter(|&d| d != config.dim) {
@@ -480,7 +494,7 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         "output.plots=false".into(),
         format!("time.neighbour_skin={}", config.skin),
     ];
-    if config.case != BenchCase::Lobovsky {
+    if !matches!(config.case, BenchCase::Lobovsky | BenchCase::Apollo) {
         overrides.push("time.integrator=\"verlet\"".into());
     }
     match config.case {
@@ -489,6 +503,9 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
         BenchCase::TankGeometric => overrides.push("shepard=\"geometric\"".into()),
         BenchCase::TankEnergy => overrides.push("boundary=\"energy\"".into()),
         BenchCase::SphericTest2 | BenchCase::Lobovsky => {}
+        BenchCase::Apollo => {
+            overrides.push(format!("wall.1.translate=[8.0, 8.0, {APOLLO_TOUCHING}]"))
+        }
     }
     let loaded = parse_case("<bench>", text, &overrides).map_err(|e| (1, e.to_string()))?;
     pool.install(|| match config.dim {

@@ -113,6 +113,11 @@ pub struct SimConfig<V: Vector> {
     /// pairs for a step from them. Not used when the list would exceed
     /// [`CANDIDATE_LIST_BUDGET`].
     pub neighbour_skin: f64,
+    /// Most bytes the listed pairs of a midpoint step (fluid pairs, and particle-element
+    /// pairs for the energy-conserving walls) may take; larger runs search the neighbours at
+    /// every iteration instead. The lists repeat the search in its order and bits, so results
+    /// do not depend on it, only the time.
+    pub pair_list_budget: usize,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
     /// Periodic axes (the period along an axis is the domain's extent there).
@@ -159,8 +164,7 @@ struct Scratch<V> {
     skin: f64,
 }
 
-/// Most bytes the listed fluid pairs of a midpoint step may take; larger runs search the
-/// neighbours at every iteration instead.
+/// [`SimConfig::pair_list_budget`] where the memory of the machine is not known.
 pub const PAIR_LIST_BUDGET: usize = 2 << 30;
 
 /// Most bytes the explicit scheme's Verlet list may take (4 per candidate); larger runs search
@@ -674,13 +678,14 @@ impl<V: Vector> Simulation<V> {
     /// midpoint step, whose positions and grid are frozen): they then skip the neighbour
     /// search and give the same bits. The pairs come from the Verlet list while it holds,
     /// else from the cell grid. Does nothing when the list would take more than
-    /// [`PAIR_LIST_BUDGET`] bytes (estimated from the particle spacing, 25% over a lattice).
+    /// [`SimConfig::pair_list_budget`] bytes (estimated from the particle spacing, 25% over a
+    /// lattice).
     pub(crate) fn list_pairs(&mut self) {
         let start = Instant::now();
         let kernel = self.config.kernel;
         let bytes = listed_pairs(&self.config, self.fluid.len(), kernel.support)
             * PairList::<V>::PAIR_BYTES as f64;
-        if !bytes.is_finite() || bytes > PAIR_LIST_BUDGET as f64 {
+        if !bytes.is_finite() || bytes > self.config.pair_list_budget as f64 {
             self.scratch.pairs_listed = false;
             return;
         }
@@ -703,7 +708,7 @@ impl<V: Vector> Simulation<V> {
             listed_pairs(&self.config, elements, kernel.support) * PairList::<V>::PAIR_BYTES as f64;
         if matches!(self.config.wall_model, WallModelChoice::Energy)
             && elements > 0
-            && bytes + wall_bytes <= PAIR_LIST_BUDGET as f64
+            && bytes + wall_bytes <= self.config.pair_list_budget as f64
         {
             let s = &mut self.scratch;
             ListedEnergyWalls::rebuild(

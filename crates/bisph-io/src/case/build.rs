@@ -92,6 +92,7 @@ pub fn build_simulation_with_layout<V: CaseDim>(
         particle_spacing: case.resolution.dx,
         reorder_interval: 1,
         neighbour_skin: case.time.neighbour_skin,
+        pair_list_budget: crate::case::resources::pair_list_budget(),
         elastic_bounce: case.elastic_bounce,
         periodicity,
         viscosity: bisph_core::terms::Viscosity {

@@ -121,6 +121,15 @@ pub fn estimated_bytes(loaded: &LoadedCase) -> f64 {
         + estimated_elements(loaded) * bytes_per_element(d) as f64
 }
 
+/// Bytes a midpoint step's pair lists may take ([`bisph_core::SimConfig::pair_list_budget`]):
+/// half the memory available when the case is built, or
+/// [`bisph_core::simulation::PAIR_LIST_BUDGET`] where that is not known.
+pub fn pair_list_budget() -> usize {
+    available_memory().map_or(bisph_core::simulation::PAIR_LIST_BUDGET, |b| {
+        usize::try_from(b / 2).unwrap_or(usize::MAX)
+    })
+}
+
 /// `MemAvailable` from `/proc/meminfo` in bytes (None where there is no such file).
 pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
