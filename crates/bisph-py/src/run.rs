@@ -66,9 +66,11 @@ pub struct Stop {
 /// The hand-off between the work and the thread that watches for signals.
 #[derive(Default)]
 struct Watch {
-    /// A progress callable ran (and may have raised a signal, e.g. by
-    /// `_thread.interrupt_main()`); the work waits for the signal check that follows.
-    check_asked: bool,
+    /// Signal checks asked for by the work, each after a progress callable ran (which may
+    /// have raised a signal, e.g. by `_thread.interrupt_main()`).
+    asked: u64,
+    /// Checks asked for before the start of the last completed check (all answered by it).
+    answered: u64,
     /// The work has ended (or unwound).
     done: bool,
 }
@@ -115,11 +117,12 @@ impl Stop {
     /// work goes on regardless (no thread may be watching).
     fn await_signal_check(&self) {
         let mut watch = self.lock_watch();
-        watch.check_asked = true;
+        watch.asked += 1;
+        let ticket = watch.asked;
         self.watch_changed.notify_all();
         let _ = self
             .watch_changed
-            .wait_timeout_while(watch, SIGNAL_POLL, |w| w.check_asked && !w.done);
+            .wait_timeout_while(watch, SIGNAL_POLL, |w| w.answered < ticket && !w.done);
     }
 
     /// Tells the watching thread that the work has ended.
@@ -135,12 +138,14 @@ impl Stop {
         while !watch.done {
             watch = self
                 .watch_changed
-                .wait_timeout_while(watch, SIGNAL_POLL, |w| !w.check_asked && !w.done)
+                .wait_timeout_while(watch, SIGNAL_POLL, |w| w.answered == w.asked && !w.done)
                 .unwrap_or_else(PoisonError::into_inner)
                 .0;
             if watch.done {
                 break;
             }
+            // Every check asked for so far came before this one starts.
+            let ticket = watch.asked;
             drop(watch);
             if !self.requested() {
                 if let Err(e) = Python::attach(|py| py.check_signals()) {
@@ -148,7 +153,7 @@ impl Stop {
                 }
             }
             watch = self.lock_watch();
-            watch.check_asked = false;
+            watch.answered = ticket;
             self.watch_changed.notify_all();
         }
     }
