@@ -34,6 +34,12 @@ pub struct EnergyBudget {
 /// Sums `f(i)` for `i < n` exactly, rounded once ([`ExactSum`]): the same bits for any
 /// number of threads, any order of the terms, and any split of them over parts.
 pub fn deterministic_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
+    exact_partial_sum(n, f).value()
+}
+
+/// The exact sum of `f(i)` for `i < n`, not yet rounded: partial sums of several parts merge
+/// into the bits of the whole's ([`ExactSum::merge`]).
+pub fn exact_partial_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> ExactSum {
     const CHUNK: usize = 4096;
     (0..n.div_ceil(CHUNK))
         .into_par_iter()
@@ -46,19 +52,28 @@ pub fn deterministic_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> f64 {
             a.merge(&b);
             a
         })
-        .value()
 }
 
 /// The fluid's kinetic, compressible and potential energies.
 pub fn fluid_energies<V: Vector>(fluid: &Fluid<V>, eos: &Eos, gravity: V) -> (f64, f64, f64) {
-    let n = fluid.len();
-    let kinetic = deterministic_sum(n, |i| {
+    let [kinetic, compressible, potential] = fluid_energy_sums(fluid, fluid.len(), eos, gravity);
+    (kinetic.value(), compressible.value(), potential.value())
+}
+
+/// The exact kinetic, compressible and potential energies of the first `n` particles.
+pub fn fluid_energy_sums<V: Vector>(
+    fluid: &Fluid<V>,
+    n: usize,
+    eos: &Eos,
+    gravity: V,
+) -> [ExactSum; 3] {
+    let kinetic = exact_partial_sum(n, |i| {
         0.5 * fluid.mass[i] * fluid.velocity[i].length_squared()
     });
     let compressible =
-        deterministic_sum(n, |i| fluid.mass[i] * eos.specific_energy(fluid.density[i]));
-    let potential = deterministic_sum(n, |i| -fluid.mass[i] * gravity.dot(fluid.position[i]));
-    (kinetic, compressible, potential)
+        exact_partial_sum(n, |i| fluid.mass[i] * eos.specific_energy(fluid.density[i]));
+    let potential = exact_partial_sum(n, |i| -fluid.mass[i] * gravity.dot(fluid.position[i]));
+    [kinetic, compressible, potential]
 }
 
 /// Energy scale used to express drift: the initial kinetic and compressible energy plus the

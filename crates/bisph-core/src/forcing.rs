@@ -9,7 +9,9 @@
 //! - eq 63 (Mayrhofer et al.): `F^n = (v - 2 v~^{n-1} + v~^{n-2}) / dt + F^{n-1}`, which
 //!   carries the internal forces over from the last step and settles at `v~ = v`.
 
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
+use crate::energy::exact_partial_sum;
 use crate::neighbours::Periodicity;
 
 /// Which update rule drives the flux.
@@ -60,16 +62,36 @@ impl<V: Vector> FluxControl<V> {
         density: &[f64],
         periodicity: &Periodicity<V>,
     ) -> f64 {
+        let flux = self.flux_sum(position, velocity, mass, density, periodicity);
+        self.bulk_velocity_of(flux.value())
+    }
+
+    /// The volume flux through the slice, `sum V_i u_i . e` over the particles in it (of
+    /// `position`, the others' arrays at least as long), summed exactly: the sums over parts
+    /// of the fluid add up to the whole's.
+    pub fn flux_sum(
+        &self,
+        position: &[V],
+        velocity: &[V],
+        mass: &[f64],
+        density: &[f64],
+        periodicity: &Periodicity<V>,
+    ) -> ExactSum {
         let half = 0.5 * self.slice_width;
-        let mut flux = 0.0;
-        for i in 0..position.len() {
+        exact_partial_sum(position.len(), |i| {
             let d = periodicity
                 .minimum_image(position[i] - self.slice_point)
                 .dot(self.direction);
             if d >= -half && d < half {
-                flux += mass[i] / density[i] * velocity[i].dot(self.direction);
+                mass[i] / density[i] * velocity[i].dot(self.direction)
+            } else {
+                0.0
             }
-        }
+        })
+    }
+
+    /// The bulk velocity of the volume flux `flux` through the slice ([`FluxControl::flux_sum`]).
+    pub fn bulk_velocity_of(&self, flux: f64) -> f64 {
         flux / self.slice_width / self.area
     }
 

@@ -85,6 +85,104 @@ impl<V: Vector> Fluid<V> {
     }
 }
 
+impl<V: Vector> Fluid<V> {
+    /// Words per particle in [`Fluid::encode`]: the id and every state and rate array.
+    pub const RECORD_WORDS: usize = 8 + 5 * V::DIM;
+
+    /// Keeps the first `n` particles.
+    pub fn truncate(&mut self, n: usize) {
+        self.id.truncate(n);
+        self.position.truncate(n);
+        self.velocity.truncate(n);
+        self.density.truncate(n);
+        self.mass.truncate(n);
+        self.pressure.truncate(n);
+        self.acceleration.truncate(n);
+        self.density_rate.truncate(n);
+        self.earlier_acceleration.truncate(n);
+        self.earlier_density_rate.truncate(n);
+        self.gamma.truncate(n);
+        self.grad_gamma.truncate(n);
+        self.density_offset.truncate(n);
+    }
+
+    /// Gives every particle the arrays of the step before (zero), so that every particle
+    /// carries the same fields ([`Fluid::encode`]).
+    pub fn hold_earlier_rates(&mut self) {
+        self.earlier_acceleration.resize(self.len(), V::ZERO);
+        self.earlier_density_rate.resize(self.len(), 0.0);
+    }
+
+    /// Appends the whole record of each particle of `indices` to `out`, bit for bit
+    /// ([`Fluid::RECORD_WORDS`] words each, read back by [`Fluid::append_encoded`]). The
+    /// arrays of the step before must be held ([`Fluid::hold_earlier_rates`]).
+    pub fn encode(&self, indices: impl IntoIterator<Item = usize>, out: &mut Vec<u64>) {
+        let vector = |out: &mut Vec<u64>, v: V| {
+            out.extend((0..V::DIM).map(|k| v.get(k).to_bits()));
+        };
+        for i in indices {
+            out.push(u64::from(self.id[i]));
+            vector(out, self.position[i]);
+            vector(out, self.velocity[i]);
+            vector(out, self.acceleration[i]);
+            vector(out, self.earlier_acceleration[i]);
+            vector(out, self.grad_gamma[i]);
+            out.extend(
+                [
+                    self.density[i],
+                    self.mass[i],
+                    self.pressure[i],
+                    self.density_rate[i],
+                    self.earlier_density_rate[i],
+                    self.gamma[i],
+                    self.density_offset[i],
+                ]
+                .map(f64::to_bits),
+            );
+        }
+    }
+
+    /// Appends the particles whose records [`Fluid::encode`] wrote to `words`.
+    ///
+    /// # Panics
+    /// When `words` does not hold whole records.
+    pub fn append_encoded(&mut self, words: &[u64]) {
+        assert_eq!(
+            words.len() % Self::RECORD_WORDS,
+            0,
+            "whole particle records"
+        );
+        for record in words.chunks_exact(Self::RECORD_WORDS) {
+            let mut next = record.iter().copied();
+            let mut scalar = || f64::from_bits(next.next().unwrap_or_default());
+            let id = record[0] as u32;
+            scalar();
+            let mut vector = || {
+                let mut v = V::ZERO;
+                for k in 0..V::DIM {
+                    v.set(k, scalar());
+                }
+                v
+            };
+            let (position, velocity, acceleration) = (vector(), vector(), vector());
+            let (earlier_acceleration, grad_gamma) = (vector(), vector());
+            self.id.push(id);
+            self.position.push(position);
+            self.velocity.push(velocity);
+            self.acceleration.push(acceleration);
+            self.earlier_acceleration.push(earlier_acceleration);
+            self.grad_gamma.push(grad_gamma);
+            self.density.push(scalar());
+            self.mass.push(scalar());
+            self.pressure.push(scalar());
+            self.density_rate.push(scalar());
+            self.earlier_density_rate.push(scalar());
+            self.gamma.push(scalar());
+            self.density_offset.push(scalar());
+        }
+    }
+}
+
 /// Reusable buffers for [`Fluid::permute`], so reordering allocates nothing per step.
 #[derive(Debug, Default)]
 pub struct PermuteScratch<V> {

@@ -1,6 +1,8 @@
 //! Probes: pressure sampled at fixed points, and water heights along vertical columns.
 
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
+use crate::energy::exact_partial_sum;
 use crate::kernel::Wendland;
 use crate::neighbours::CellGrid;
 use crate::particles::Fluid;
@@ -34,6 +36,30 @@ pub struct Probe<V> {
 impl<V: Vector> Probe<V> {
     /// The probe's value for the current fluid state.
     pub fn sample(&self, kernel: &Wendland, fluid: &Fluid<V>, grid: &CellGrid<V>) -> f64 {
+        self.sample_sum(kernel, fluid, fluid.len(), grid, |_| true)
+            .value()
+    }
+
+    /// The probe's value as an exact sum over parts of the fluid: the first `owned` particles
+    /// of `fluid` are this part's, and `owns(x)` tells whether this part samples at the point
+    /// `x`. A point value (pressures) is added by the part that owns the probe's position, from
+    /// the neighbours around it; a height by every part, over its own particles. The sums of
+    /// all parts add up to the value of the whole fluid, with its bits.
+    pub fn sample_sum(
+        &self,
+        kernel: &Wendland,
+        fluid: &Fluid<V>,
+        owned: usize,
+        grid: &CellGrid<V>,
+        owns: impl Fn(V) -> bool,
+    ) -> ExactSum {
+        if self.kind == ProbeKind::Height {
+            return self.height(kernel, fluid, owned);
+        }
+        let mut sum = ExactSum::new();
+        if !owns(self.position) {
+            return sum;
+        }
         let mut weighted = 0.0;
         let mut shepard = 0.0;
         grid.for_each_neighbour(self.position, &fluid.position, kernel.support, |i, _, r| {
@@ -41,26 +67,25 @@ impl<V: Vector> Probe<V> {
             weighted += fluid.pressure[i] * wv;
             shepard += wv;
         });
-        match self.kind {
+        sum.add(match self.kind {
             ProbeKind::Pressure if shepard > 0.0 => weighted / shepard,
-            ProbeKind::Pressure => 0.0,
             ProbeKind::WallPressure => 2.0 * weighted,
-            ProbeKind::Height => self.height(kernel, fluid),
-        }
+            _ => 0.0,
+        });
+        sum
     }
 
-    /// See [`ProbeKind::Height`]: summed in particle order over all particles.
-    fn height(&self, kernel: &Wendland, fluid: &Fluid<V>) -> f64 {
+    /// See [`ProbeKind::Height`]: summed exactly over the first `n` particles.
+    fn height(&self, kernel: &Wendland, fluid: &Fluid<V>, n: usize) -> ExactSum {
         let h = kernel.h;
         let last = V::DIM - 1;
         let lower = Wendland::new(h, 2);
-        let mut sum = 0.0;
-        for i in 0..fluid.len() {
+        exact_partial_sum(n, |i| {
             let mut d = fluid.position[i] - self.position;
             d.set(last, 0.0);
             let r = d.length();
             if r >= 2.0 * h {
-                continue;
+                return 0.0;
             }
             let w = if V::DIM == 3 {
                 lower.value(r)
@@ -68,8 +93,7 @@ impl<V: Vector> Probe<V> {
                 let a = 1.0 - 0.5 * r / h;
                 5.0 / (8.0 * h) * a * a * a * (1.0 + 1.5 * r / h)
             };
-            sum += fluid.mass[i] / fluid.density[i] * w;
-        }
-        sum
+            fluid.mass[i] / fluid.density[i] * w
+        })
     }
 }

@@ -15,7 +15,9 @@
 //! - [`part_loads`], [`imbalance`] and [`RebalancePolicy`]: when the work has drifted far
 //!   enough from the cuts to decompose again;
 //! - [`ExactSum`]: an exact, order-independent sum of `f64` values, so a global reduction
-//!   gives the same bits however its terms are spread over parts.
+//!   gives the same bits however its terms are spread over parts;
+//! - [`Transport`]: the all-to-all exchange between parts the collectives are built on, with
+//!   [`InProcess`] for parts that are threads of one process.
 
 mod balance;
 mod bisection;
@@ -23,8 +25,11 @@ mod bounds;
 mod exact_sum;
 mod halo;
 mod migration;
+#[cfg(feature = "mpi")]
+mod mpi;
 #[cfg(test)]
 mod test_support;
+mod transport;
 
 pub use balance::{imbalance, part_loads, RebalancePolicy};
 pub use bisection::{bisect, Cut, Decomposition};
@@ -32,6 +37,11 @@ pub use bounds::Bounds;
 pub use exact_sum::{exact_sum, ExactSum};
 pub use halo::{select_halos, HaloEntry};
 pub use migration::{plan_migration, Departures, MigrationPlan};
+#[cfg(feature = "mpi")]
+pub use mpi::MpiTransport;
+pub use transport::{
+    all_gather, all_parts, max_over_parts, sum_over_parts, InProcess, Message, Transport,
+};
 
 /// Global particle identity, as stored in [`crate::Fluid::id`]: unique over the whole run,
 /// independent of which part holds the particle and where in its arrays.

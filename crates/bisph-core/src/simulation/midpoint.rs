@@ -31,7 +31,6 @@
 use super::settings::MidpointParams;
 use super::Simulation;
 use crate::dim::Vector;
-use crate::energy::deterministic_sum;
 use crate::error::SimError;
 use crate::walls::bounce::elastic_bounce;
 use rayon::prelude::*;
@@ -73,7 +72,7 @@ impl<V: Vector> Simulation<V> {
             self.walls.set_dynamic_velocities(&body_velocity);
             self.walls.set_velocities_at(t_mid);
             self.evaluate_rates();
-            let mut body_acceleration = self.walls.body_accelerations(false);
+            let mut body_acceleration = self.body_accelerations(false);
             residue = self.residue();
             for k in 0..body_acceleration.len() {
                 residue += (body_inertia[k]
@@ -116,7 +115,10 @@ impl<V: Vector> Simulation<V> {
         }
         self.walls.set_dynamic_velocities(&body_velocity);
         // Staggered bodies take the load of this step for the next one.
-        self.walls.update_staggered();
+        if self.walls.has_dynamic_bodies() {
+            let loads = self.body_loads();
+            self.walls.update_staggered(&loads);
+        }
         self.walls.drift_bodies(dt);
         for (k, v) in body_velocity.iter_mut().enumerate() {
             *v = body_start[k] + dt * body_acceleration[k];
@@ -138,7 +140,7 @@ impl<V: Vector> Simulation<V> {
             .zip(f.acceleration.par_iter())
             .for_each(|(u, &a)| *u += a * dt);
         if self.config.elastic_bounce {
-            self.wall_work += elastic_bounce(
+            elastic_bounce(
                 &self.walls.elements,
                 &self.walls.grid,
                 &self.wall_clearance,
@@ -167,6 +169,10 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(f.density_rate.par_iter())
             .for_each(|(rho, &d)| *rho += d * dt);
+        if self.config.elastic_bounce {
+            let lost = &self.scratch.lost_energy;
+            self.wall_work += self.sum_owned(|i| lost[i]);
+        }
         self.wrap_positions();
         self.time += dt;
         self.step += 1;
@@ -234,7 +240,7 @@ impl<V: Vector> Simulation<V> {
     fn residue(&self) -> f64 {
         let f = &self.fluid;
         let s = &self.scratch;
-        deterministic_sum(f.len(), |i| {
+        self.sum_owned(|i| {
             let rho = s.density[i];
             f.mass[i]
                 * ((s.velocity[i].dot(f.acceleration[i] - s.previous_acceleration[i])).abs()

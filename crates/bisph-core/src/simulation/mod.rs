@@ -3,6 +3,7 @@
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
 mod midpoint;
+mod part;
 mod settings;
 mod settle;
 mod verlet;
@@ -11,8 +12,9 @@ mod wall_models;
 pub use settings::{MidpointParams, SettleOutcome, SettleParams, SettleReport};
 pub use wall_models::{UsawParams, WallModelChoice};
 
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
-use crate::energy::{fluid_energies, EnergyBudget};
+use crate::energy::{fluid_energy_sums, EnergyBudget};
 use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
@@ -29,6 +31,7 @@ use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::Shepard;
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
+use part::{BadParticle, HaloFields, Part};
 use rayon::prelude::*;
 use std::time::Instant;
 use wall_models::{WallModelInputs, WallModelTask};
@@ -235,6 +238,8 @@ pub struct Simulation<V: Vector> {
     /// Wall-clock seconds spent per phase since the start.
     pub timings: PhaseTimes,
     scratch: Scratch<V>,
+    /// What makes this simulation one part of a decomposed run (`None`: the whole run).
+    part: Option<Part<V>>,
 }
 
 impl<V: Vector> Simulation<V> {
@@ -289,6 +294,7 @@ impl<V: Vector> Simulation<V> {
             wall_clearance: WallClearance::default(),
             timings: PhaseTimes::default(),
             scratch: Scratch::default(),
+            part: None,
         };
         let period = sim.config.periodicity;
         let grid = CellGrid::with_period(cell, period)
@@ -340,30 +346,72 @@ impl<V: Vector> Simulation<V> {
         sim
     }
 
-    /// Bulk velocity over the flux controller's slice (paper 3 eqs 56-57; 0 without one).
+    /// A simulation holding `fluid` in the state of `whole`, with no neighbour list (the
+    /// start of [`Simulation::part_of`]).
+    fn new_part(whole: &Simulation<V>, fluid: Fluid<V>) -> Self {
+        Simulation {
+            config: whole.config.clone(),
+            fluid,
+            walls: whole.walls.clone(),
+            vertices: whole.vertices.clone(),
+            probes: whole.probes.clone(),
+            time: whole.time,
+            step: whole.step,
+            last_dt: whole.last_dt,
+            earlier_dt: whole.earlier_dt,
+            wall_work: whole.wall_work,
+            wall_power: whole.wall_power,
+            viscous_dissipation: whole.viscous_dissipation,
+            viscous_power: whole.viscous_power,
+            diffusion_dissipation: whole.diffusion_dissipation,
+            diffusion_power: whole.diffusion_power,
+            forcing_work: whole.forcing_work,
+            body_force: whole.body_force,
+            flux_history: whole.flux_history,
+            last_iterations: whole.last_iterations,
+            last_residue: whole.last_residue,
+            fluid_grid: whole.fluid_grid.clone(),
+            wall_clearance: WallClearance::default(),
+            timings: PhaseTimes::default(),
+            scratch: Scratch {
+                skin: whole.scratch.skin,
+                ..Scratch::default()
+            },
+            part: None,
+        }
+    }
+
+    /// Bulk velocity over the flux controller's slice (paper 3 eqs 56-57; 0 without one),
+    /// summed exactly.
     pub fn bulk_velocity(&self) -> f64 {
         let Some(flux) = &self.config.flux else {
             return 0.0;
         };
         let f = &self.fluid;
-        flux.bulk_velocity(
-            &f.position,
+        let mut sum = [flux.flux_sum(
+            &f.position[..self.owned_len()],
             &f.velocity,
             &f.mass,
             &f.density,
             &self.config.periodicity,
-        )
+        )];
+        self.sum_over_parts(&mut sum);
+        flux.bulk_velocity_of(sum[0].value())
     }
 
-    /// Total momentum `sum_i m_i u_i` (summed in particle-id order: the same bits for any
-    /// thread count and memory order).
+    /// Total momentum `sum_i m_i u_i`, summed exactly (the same bits for any thread count,
+    /// memory order and decomposition).
     pub fn momentum(&self) -> V {
         let f = &self.fluid;
-        let mut by_id = vec![V::ZERO; f.len()];
-        for i in 0..f.len() {
-            by_id[f.id[i] as usize] = f.velocity[i] * f.mass[i];
-        }
-        by_id.into_iter().fold(V::ZERO, |a, b| a + b)
+        let mut sums: Vec<ExactSum> = (0..V::DIM)
+            .map(|k| {
+                crate::energy::exact_partial_sum(self.owned_len(), |i| {
+                    f.mass[i] * f.velocity[i].get(k)
+                })
+            })
+            .collect();
+        self.sum_over_parts(&mut sums);
+        V::from_slice(&sums.iter().map(ExactSum::value).collect::<Vec<_>>())
     }
 
     /// Sets the driving acceleration of the coming step of size `dt` (eq 58 or 63), moving
@@ -474,6 +522,7 @@ impl<V: Vector> Simulation<V> {
             f.density[i] = (s + f.density_offset[i]) / f.gamma[i];
             f.density_rate[i] = 0.0;
         }
+        self.refresh_halo(HaloFields::Density);
     }
 
     /// Semi-analytical walls: vertex masses `m_v = rho_v V_v` from their current extrapolated
@@ -511,11 +560,29 @@ impl<V: Vector> Simulation<V> {
         self.refresh_pressure();
     }
 
-    /// Dynamic bodies' accelerations from the wall pressures of the last rate evaluation
+    /// Stores the dynamic bodies' accelerations from the wall pressures of the last rate evaluation
     /// (staggered free bodies only when `all`).
     pub(crate) fn store_body_accelerations(&mut self, all: bool) {
-        let acc = self.walls.body_accelerations(all);
+        let acc = self.body_accelerations(all);
         self.walls.set_dynamic_accelerations(&acc);
+    }
+
+    /// Dynamic bodies' accelerations from the wall pressures of the last rate evaluation
+    /// ([`Walls::body_accelerations`]; staggered free bodies keep theirs unless `all`).
+    pub(crate) fn body_accelerations(&self, all: bool) -> Vec<f64> {
+        if !self.walls.has_dynamic_bodies() {
+            return Vec::new();
+        }
+        self.walls.body_accelerations(all, &self.body_loads())
+    }
+
+    /// Pressure force and torque on each body (see [`Walls::body_loads`]) at the current wall
+    /// pressures, summed over the elements of every part.
+    pub fn body_loads(&self) -> Vec<(V, V::Angular)> {
+        let t = self.walls.placed_at;
+        let mut sums = self.walls.body_load_sums(t, self.element_counter());
+        self.sum_over_parts(&mut sums);
+        self.walls.loads_of_sums(&sums)
     }
 
     /// The rate model handed to the sweep.
@@ -591,21 +658,23 @@ impl<V: Vector> Simulation<V> {
         let interval = self.config.reorder_interval;
         let skin = self.scratch.skin;
         if skin <= 0.0 {
-            self.rebuild_grid(interval > 0 && self.step.is_multiple_of(interval));
+            let reorder = interval > 0 && self.step.is_multiple_of(interval);
+            self.rebuild_neighbours(reorder);
             return;
         }
         let start = Instant::now();
-        let s = &mut self.scratch;
-        if s.candidates_valid && s.candidates.holds(&self.fluid.position, 0.5 * skin) {
+        let s = &self.scratch;
+        let holds = s.candidates_valid && s.candidates.holds(&self.fluid.position, 0.5 * skin);
+        if self.on_all_parts(holds) {
             if self.config.periodicity.any() {
                 self.fluid_grid
                     .rebuild_keyed(&self.fluid.position, &self.fluid.id);
             }
-            s.use_candidates = true;
+            self.scratch.use_candidates = true;
             self.timings.neighbours += start.elapsed().as_secs_f64();
             return;
         }
-        self.rebuild_grid(interval > 0);
+        self.rebuild_neighbours(interval > 0);
         let start = Instant::now();
         let radius = self.config.kernel.support + skin;
         self.scratch
@@ -616,6 +685,20 @@ impl<V: Vector> Simulation<V> {
         self.wall_clearance
             .measure(&self.walls, &self.fluid.position, 0.5 * skin);
         self.timings.neighbours += start.elapsed().as_secs_f64();
+    }
+
+    /// Rebuilds the cell grid, the particles reordered by it when `reorder`; a part first
+    /// hands the particles that left its region to their owners and selects its halo again
+    /// ([`Simulation::repartition`]).
+    fn rebuild_neighbours(&mut self, reorder: bool) {
+        if self.part.is_some() {
+            let start = Instant::now();
+            self.repartition(reorder);
+            self.timings.neighbours += start.elapsed().as_secs_f64();
+            self.rebuild_grid(false);
+        } else {
+            self.rebuild_grid(reorder);
+        }
     }
 
     /// Lower bounds of the particles' distances to the walls: with fixed walls and a Verlet
@@ -826,18 +909,21 @@ impl<V: Vector> Simulation<V> {
         self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
         let d = &self.scratch.dissipation;
         self.viscous_power = if model.viscosity.active() {
-            crate::energy::deterministic_sum(d.len(), |i| d[i].viscous)
+            self.sum_owned(|i| d[i].viscous)
         } else {
             0.0
         };
         self.diffusion_power = if model.diffusion.scale != 0.0 {
-            crate::energy::deterministic_sum(d.len(), |i| d[i].diffusion)
+            self.sum_owned(|i| d[i].diffusion)
         } else {
             0.0
         };
-        self.wall_power = self.walls.power();
+        let mut power = [self.walls.power_sum(self.element_counter())];
+        self.sum_over_parts(&mut power);
+        self.wall_power = power[0].value();
         // The list was checked for these positions only.
         self.scratch.use_candidates = false;
+        self.refresh_halo(HaloFields::Rates);
         self.timings.rates += start.elapsed().as_secs_f64();
     }
 
@@ -943,63 +1029,59 @@ impl<V: Vector> Simulation<V> {
         self.check_state()
     }
 
-    /// Stops on the first particle (in memory order) with a non-finite state or outside the
-    /// domain.
+    /// Stops on the particle with the lowest id, over every part, whose state is not finite
+    /// or which left the domain.
     fn check_state(&self) -> Result<(), SimError> {
+        let bad = self.first_bad_over_parts(self.first_bad_particle());
+        match bad {
+            Some(bad) => Err(bad.error(self.step, self.time)),
+            None => Ok(()),
+        }
+    }
+
+    /// Of the own particles with a non-finite state or outside the domain, the one with the
+    /// lowest id.
+    fn first_bad_particle(&self) -> Option<BadParticle> {
         let f = &self.fluid;
         let (lo, hi) = (self.config.domain_min, self.config.domain_max);
-        let is_bad = |i: usize| {
+        let bad = |i: usize| {
             let r = f.position[i];
-            let outside = (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k)));
-            outside
-                || !f.velocity[i].is_finite()
-                || !(f.density[i].is_finite() && f.density[i] > 0.0)
+            let quantity = if !r.is_finite() {
+                0
+            } else if !f.velocity[i].is_finite() {
+                1
+            } else if !(f.density[i].is_finite() && f.density[i] > 0.0) {
+                2
+            } else if (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k))) {
+                3
+            } else {
+                return None;
+            };
+            Some(BadParticle::new(f.id[i], quantity, r.to_xyz()))
         };
-        // Sequential scans of blocks in parallel: the first bad particle in memory order,
-        // without the per-item synchronisation of a parallel `position_first`.
+        // Blocks scanned in parallel for any bad particle; all are then looked at in turn
+        // (only when the run stops).
         const BLOCK: usize = 4096;
-        let n = f.len();
-        let bad = (0..n.div_ceil(BLOCK))
+        let n = self.owned_len();
+        let any = (0..n.div_ceil(BLOCK))
             .into_par_iter()
-            .find_map_first(|b| (b * BLOCK..((b + 1) * BLOCK).min(n)).find(|&i| is_bad(i)));
-        let Some(i) = bad else { return Ok(()) };
-        let (particle, step, time) = (f.id[i], self.step, self.time);
-        if !f.position[i].is_finite() {
-            return Err(SimError::NonFinite {
-                particle,
-                quantity: "position",
-                step,
-                time,
-            });
+            .any(|b| (b * BLOCK..((b + 1) * BLOCK).min(n)).any(|i| bad(i).is_some()));
+        if !any {
+            return None;
         }
-        if !f.velocity[i].is_finite() {
-            return Err(SimError::NonFinite {
-                particle,
-                quantity: "velocity",
-                step,
-                time,
-            });
-        }
-        if !f.density[i].is_finite() || f.density[i] <= 0.0 {
-            return Err(SimError::NonFinite {
-                particle,
-                quantity: "density",
-                step,
-                time,
-            });
-        }
-        Err(SimError::LeftDomain {
-            particle,
-            position: f.position[i].to_xyz(),
-            step,
-            time,
-        })
+        (0..n).filter_map(bad).min_by_key(|b| b.id())
     }
 
     /// The energy budget of the current state.
     pub fn energy(&self) -> EnergyBudget {
-        let (kinetic, compressible, potential) =
-            fluid_energies(&self.fluid, &self.config.eos, self.config.gravity);
+        let mut sums = fluid_energy_sums(
+            &self.fluid,
+            self.owned_len(),
+            &self.config.eos,
+            self.config.gravity,
+        );
+        self.sum_over_parts(&mut sums);
+        let [kinetic, compressible, potential] = sums.map(|s| s.value());
         EnergyBudget {
             kinetic,
             compressible,
@@ -1018,20 +1100,33 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
-    /// Probe values for the current state.
+    /// Probe values for the current state. A probe is sampled by the part whose region holds
+    /// it, or summed over the own particles of every part (heights).
     pub fn sample_probes(&self) -> Vec<f64> {
-        self.probes
+        let mut sums: Vec<ExactSum> = self
+            .probes
             .iter()
-            .map(|p| p.sample(&self.config.kernel, &self.fluid, &self.fluid_grid))
-            .collect()
+            .map(|p| {
+                let kernel = &self.config.kernel;
+                p.sample_sum(
+                    kernel,
+                    &self.fluid,
+                    self.owned_len(),
+                    &self.fluid_grid,
+                    |x| self.owns_point(x),
+                )
+            })
+            .collect();
+        self.sum_over_parts(&mut sums);
+        sums.iter().map(ExactSum::value).collect()
     }
 
-    /// Number of fluid-fluid pairs within the support (each particle counts its neighbours,
-    /// itself included), for throughput figures.
+    /// Number of fluid-fluid pairs within the support (each own particle counts its
+    /// neighbours, itself included), for throughput figures.
     pub fn count_pairs(&self) -> u64 {
         let f = &self.fluid;
         let support = self.config.kernel.support;
-        (0..f.len())
+        (0..self.owned_len())
             .into_par_iter()
             .map(|i| {
                 let mut n = 0u64;
@@ -1046,23 +1141,23 @@ impl<V: Vector> Simulation<V> {
             .sum()
     }
 
-    /// Largest particle acceleration of the last rate evaluation.
+    /// Largest particle acceleration of the last rate evaluation (over every part).
     pub fn max_acceleration(&self) -> f64 {
-        self.fluid
-            .acceleration
+        let largest = self.fluid.acceleration[..self.owned_len()]
             .par_iter()
             .map(|a| a.length_squared())
             .reduce(|| 0.0, f64::max)
-            .sqrt()
+            .sqrt();
+        self.max_over_parts(largest)
     }
 
-    /// Largest particle speed.
+    /// Largest particle speed (over every part).
     pub fn max_speed(&self) -> f64 {
-        self.fluid
-            .velocity
+        let largest = self.fluid.velocity[..self.owned_len()]
             .iter()
             .map(|u| u.length())
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        self.max_over_parts(largest)
     }
 }
 

@@ -26,7 +26,7 @@ impl<V: Vector> Simulation<V> {
                 .zip(f.acceleration.par_iter())
                 .for_each(|(u, &a)| *u += a * half);
             if self.config.elastic_bounce {
-                self.wall_work += elastic_bounce(
+                elastic_bounce(
                     &self.walls.elements,
                     &self.walls.grid,
                     &self.wall_clearance,
@@ -38,6 +38,13 @@ impl<V: Vector> Simulation<V> {
                     &mut self.scratch.lost_energy,
                 );
             }
+        }
+        if self.config.elastic_bounce {
+            let lost = &self.scratch.lost_energy;
+            self.wall_work += self.sum_owned(|i| lost[i]);
+        }
+        {
+            let f = &mut self.fluid;
             f.position
                 .par_iter_mut()
                 .zip(f.velocity.par_iter())

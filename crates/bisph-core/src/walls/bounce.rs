@@ -23,8 +23,8 @@ use rayon::prelude::*;
 /// the wall, which keeps its magnitude. Without `end`, `drift` is also the particle velocity.
 /// Particles that `clearance` shows farther from every wall than the drift takes them are not
 /// searched (a bounce off element `j` needs `|x - c_j| - reach_j <= dt (drift - U_j) . n_j`).
-/// Returns the kinetic energy the particles lost (energy given to moving walls), summed in a
-/// fixed order.
+/// Sets `lost_energy` to the kinetic energy each particle lost (energy given to moving
+/// walls).
 #[allow(clippy::too_many_arguments)]
 pub fn elastic_bounce<V: Vector>(
     elements: &BoundaryElements<V>,
@@ -36,12 +36,12 @@ pub fn elastic_bounce<V: Vector>(
     end: Option<&mut [V]>,
     dt: f64,
     lost_energy: &mut Vec<f64>,
-) -> f64 {
-    if elements.is_empty() {
-        return 0.0;
-    }
+) {
     lost_energy.clear();
     lost_energy.resize(position.len(), 0.0);
+    if elements.is_empty() {
+        return;
+    }
     let reflect = |u: &mut V, j: usize| {
         let n = elements.normal[j];
         let normal_speed = (*u - elements.velocity[j]).dot(n);
@@ -98,5 +98,4 @@ pub fn elastic_bounce<V: Vector>(
             .with_min_len(256)
             .for_each(|(i, (d, lost))| visit(i, d, None, lost)),
     }
-    crate::energy::deterministic_sum(lost_energy.len(), |i| lost_energy[i])
 }

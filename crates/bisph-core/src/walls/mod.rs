@@ -15,6 +15,7 @@ pub mod shepard_bi;
 pub mod usaw;
 
 use crate::bodies::{self, Body, Kinematics, Motion, Piston};
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
 use crate::kernel::Wendland;
 use crate::neighbours::{CellGrid, Periodicity};
@@ -355,14 +356,14 @@ impl<V: Vector> Walls<V> {
     }
 
     /// Generalised accelerations of every dynamic body (pistons, free bodies), in body order
-    /// and the layout of [`Motion::accelerations`], from the current wall pressures and the
-    /// bodies' current (midpoint) velocities. A piston: `(F_fluid . axis - F_out) / m`;
-    /// a free body: [`FreeBody::accelerations`]. Bodies with `iterated == false` and
-    /// `all == false` keep their stored accelerations (staggered coupling).
-    pub fn body_accelerations(&self, all: bool) -> Vec<f64> {
-        let loads = self.body_loads(self.placed_at);
+    /// and the layout of [`Motion::accelerations`], from the wall loads `loads` (one per body,
+    /// [`Walls::body_loads`]) and the bodies' current (midpoint) velocities. A piston:
+    /// `(F_fluid . axis - F_out) / m`; a free body: [`FreeBody::accelerations`]. Bodies with
+    /// `iterated == false` and `all == false` keep their stored accelerations (staggered
+    /// coupling).
+    pub fn body_accelerations(&self, all: bool, loads: &[(V, V::Angular)]) -> Vec<f64> {
         let mut out = Vec::new();
-        for (b, (force, torque)) in self.bodies.iter().zip(loads) {
+        for (b, &(force, torque)) in self.bodies.iter().zip(loads) {
             if !all && !b.motion.iterated() {
                 b.motion.accelerations(&mut out);
                 continue;
@@ -381,13 +382,20 @@ impl<V: Vector> Walls<V> {
         out
     }
 
+    /// `true` when some body moves under the fluid's loads (a piston or a free body).
+    pub fn has_dynamic_bodies(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| matches!(b.motion, Motion::Piston(_) | Motion::Free(_)))
+    }
+
     /// Staggered coupling: bodies that do not iterate with the fluid take the accelerations of
-    /// the current wall loads (used through the next step); the others keep theirs.
-    pub fn update_staggered(&mut self) {
+    /// the wall loads `loads` (used through the next step); the others keep theirs.
+    pub fn update_staggered(&mut self, loads: &[(V, V::Angular)]) {
         if self.bodies.iter().all(|b| b.motion.iterated()) {
             return;
         }
-        let fresh = self.body_accelerations(true);
+        let fresh = self.body_accelerations(true, loads);
         let mut k = 0;
         for b in &mut self.bodies {
             let mut n = Vec::new();
@@ -471,22 +479,55 @@ impl<V: Vector> Walls<V> {
     }
 
     /// Pressure force `sum_j P_j n_j s_j` and torque about the body's current centre, per body
-    /// (paper 1, App. C, eqs 69-71). Summed in element order, so it does not depend on threads.
+    /// (paper 1, App. C, eqs 69-71), summed exactly ([`Walls::body_load_sums`]).
     pub fn body_loads(&self, t: f64) -> Vec<(V, V::Angular)> {
-        let mut loads = vec![(V::ZERO, V::Angular::default()); self.bodies.len()];
+        self.loads_of_sums(&self.body_load_sums(t, |_| true))
+    }
+
+    /// Components per body in [`Walls::body_load_sums`]: the force's, then the torque's.
+    pub fn load_components() -> usize {
+        V::DIM + V::angular_to_vec(V::Angular::default()).len()
+    }
+
+    /// The exact sums of the loads of [`Walls::body_loads`] over the elements `j` with
+    /// `counted(j)`, [`Walls::load_components`] per body: the sums of several parts of the
+    /// elements merge into the bits of the whole's.
+    pub fn body_load_sums(&self, t: f64, counted: impl Fn(usize) -> bool) -> Vec<ExactSum> {
+        let per_body = Self::load_components();
+        let mut sums = vec![ExactSum::new(); self.bodies.len() * per_body];
         let centres: Vec<V> = self
             .bodies
             .iter()
             .map(|b| b.centre + b.motion.kinematics(t).displacement)
             .collect();
         let e = &self.elements;
-        for j in 0..e.len() {
+        for j in (0..e.len()).filter(|&j| counted(j)) {
             let b = e.body[j] as usize;
             let f = e.normal[j] * (e.pressure[j] * e.area[j]);
-            loads[b].0 += f;
-            loads[b].1 = loads[b].1 + (e.centre[j] - centres[b]).cross(f);
+            let torque = V::angular_to_vec((e.centre[j] - centres[b]).cross(f));
+            let body = &mut sums[b * per_body..(b + 1) * per_body];
+            for (k, sum) in body.iter_mut().enumerate().take(V::DIM) {
+                sum.add(f.get(k));
+            }
+            for (sum, m) in body[V::DIM..].iter_mut().zip(torque) {
+                sum.add(m);
+            }
         }
-        loads
+        sums
+    }
+
+    /// The loads per body of the sums of [`Walls::body_load_sums`].
+    pub fn loads_of_sums(&self, sums: &[ExactSum]) -> Vec<(V, V::Angular)> {
+        let values: Vec<f64> = sums.iter().map(ExactSum::value).collect();
+        values
+            .chunks(Self::load_components())
+            .map(|c| {
+                (
+                    V::from_slice(&c[..V::DIM]),
+                    V::angular_from_slice(&c[V::DIM..]),
+                )
+            })
+            .collect()
     }
 
     /// `false` when `x` is in front of the plane of every element that comes within `radius`
@@ -578,12 +619,23 @@ impl<V: Vector> Walls<V> {
             .count()
     }
 
-    /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`.
+    /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`, summed
+    /// exactly ([`Walls::power_sum`]).
     pub fn power(&self) -> f64 {
+        self.power_sum(|_| true).value()
+    }
+
+    /// The exact sum of the power of [`Walls::power`] over the elements `j` with `counted(j)`.
+    pub fn power_sum(&self, counted: impl Fn(usize) -> bool) -> ExactSum {
         let e = &self.elements;
-        (0..e.len())
-            .map(|j| e.pressure[j] * e.area[j] * e.normal[j].dot(e.velocity[j]))
-            .sum()
+        let mut sum = ExactSum::new();
+        for j in (0..e.len()).filter(|&j| counted(j)) {
+            let u = e.velocity[j];
+            if u != V::ZERO {
+                sum.add(e.pressure[j] * e.area[j] * e.normal[j].dot(u));
+            }
+        }
+        sum
     }
 }
 

@@ -1,0 +1,209 @@
+//! How the parts of a distributed run talk to each other.
+//!
+//! A [`Transport`] moves words between parts with one collective operation, an all-to-all
+//! exchange: every part calls [`Transport::exchange`] with one message for each part and gets
+//! back the message each part sent it. The collectives a run needs (sums, maxima, agreement)
+//! are built on it here, so a transport only has to implement that one exchange: over MPI
+//! between processes, or [`InProcess`] between threads of one process.
+//!
+//! Every part must make the same sequence of collective calls; each call returns on a part
+//! only once every part has made it.
+
+use super::ExactSum;
+use std::fmt;
+use std::sync::{Arc, Barrier, Mutex};
+
+/// The words a part sends to or receives from another.
+pub type Message = Vec<u64>;
+
+/// An all-to-all exchange between the parts of a run (see the module documentation).
+pub trait Transport: Send + Sync + fmt::Debug {
+    /// This part's number, `0..parts()`.
+    fn rank(&self) -> usize;
+
+    /// Number of parts.
+    fn parts(&self) -> usize;
+
+    /// Sends `outgoing[q]` to part `q` (one message per part, this part's own included) and
+    /// returns the messages every part sent to this one, indexed by sender.
+    fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message>;
+}
+
+/// Every part's `message`, indexed by part.
+pub fn all_gather(transport: &dyn Transport, message: Message) -> Vec<Message> {
+    transport.exchange(vec![message; transport.parts()])
+}
+
+/// Adds every part's `sums` element by element, exactly: on return each part holds the same
+/// totals, with the bits of one sum over all the terms ([`ExactSum`]).
+pub fn sum_over_parts(transport: &dyn Transport, sums: &mut [ExactSum]) {
+    if transport.parts() == 1 {
+        return;
+    }
+    let words: Message = sums.iter().flat_map(|s| s.to_words()).collect();
+    let gathered = all_gather(transport, words);
+    for (k, sum) in sums.iter_mut().enumerate() {
+        let mut total = ExactSum::new();
+        for message in &gathered {
+            let mut digits = [0u64; ExactSum::WORDS];
+            digits.copy_from_slice(&message[k * ExactSum::WORDS..(k + 1) * ExactSum::WORDS]);
+            total.merge(&ExactSum::from_words(&digits));
+        }
+        *sum = total;
+    }
+}
+
+/// The largest of every part's `value` (NaN when any is NaN).
+pub fn max_over_parts(transport: &dyn Transport, value: f64) -> f64 {
+    if transport.parts() == 1 {
+        return value;
+    }
+    all_gather(transport, vec![value.to_bits()])
+        .iter()
+        .map(|m| f64::from_bits(m[0]))
+        .fold(f64::NEG_INFINITY, |a, b| {
+            if a.is_nan() || b.is_nan() {
+                f64::NAN
+            } else {
+                a.max(b)
+            }
+        })
+}
+
+/// `true` when every part's `value` is.
+pub fn all_parts(transport: &dyn Transport, value: bool) -> bool {
+    if transport.parts() == 1 {
+        return value;
+    }
+    all_gather(transport, vec![u64::from(value)])
+        .iter()
+        .all(|m| m[0] == 1)
+}
+
+/// Parts as threads of one process: [`InProcess::connect`] gives one end per part, each to be
+/// driven from its own thread. Used to run and test a decomposed simulation without MPI.
+pub struct InProcess {
+    rank: usize,
+    shared: Arc<Shared>,
+}
+
+struct Shared {
+    parts: usize,
+    /// `slots[to][from]`: the message in flight from `from` to `to`.
+    slots: Mutex<Vec<Vec<Message>>>,
+    barrier: Barrier,
+}
+
+impl InProcess {
+    /// The ends of a transport between `parts` threads, by rank.
+    ///
+    /// # Panics
+    /// When `parts` is zero.
+    pub fn connect(parts: usize) -> Vec<InProcess> {
+        assert!(parts >= 1, "a transport needs at least one part");
+        let shared = Arc::new(Shared {
+            parts,
+            slots: Mutex::new(vec![vec![Vec::new(); parts]; parts]),
+            barrier: Barrier::new(parts),
+        });
+        (0..parts)
+            .map(|rank| InProcess {
+                rank,
+                shared: Arc::clone(&shared),
+            })
+            .collect()
+    }
+}
+
+impl fmt::Debug for InProcess {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "InProcess({} of {})", self.rank, self.shared.parts)
+    }
+}
+
+impl Transport for InProcess {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn parts(&self) -> usize {
+        self.shared.parts
+    }
+
+    fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message> {
+        assert_eq!(outgoing.len(), self.parts(), "one message per part");
+        let lock = || self.shared.slots.lock().unwrap_or_else(|e| e.into_inner());
+        {
+            let mut slots = lock();
+            for (to, message) in outgoing.into_iter().enumerate() {
+                slots[to][self.rank] = message;
+            }
+        }
+        // Every message is in place once all parts pass; each then takes its own row, and
+        // nobody writes the next round's messages before all have taken theirs.
+        self.shared.barrier.wait();
+        let empty = vec![Vec::new(); self.parts()];
+        let incoming = std::mem::replace(&mut lock()[self.rank], empty);
+        self.shared.barrier.wait();
+        incoming
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn on_threads<T: Send>(parts: usize, work: impl Fn(&InProcess) -> T + Sync) -> Vec<T> {
+        let ends = InProcess::connect(parts);
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = ends.iter().map(|end| scope.spawn(|| work(end))).collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        })
+    }
+
+    #[test]
+    fn messages_reach_their_part_from_every_sender() {
+        let received = on_threads(3, |t| {
+            let outgoing = (0..3).map(|q| vec![(10 * t.rank() + q) as u64]).collect();
+            let first = t.exchange(outgoing);
+            // A second round right after: no message of the first is overwritten early.
+            let second = t.exchange(vec![vec![t.rank() as u64 + 100]; 3]);
+            (first, second)
+        });
+        for (rank, (first, second)) in received.iter().enumerate() {
+            for (from, message) in first.iter().enumerate() {
+                assert_eq!(message, &vec![(10 * from + rank) as u64]);
+            }
+            for (from, message) in second.iter().enumerate() {
+                assert_eq!(message, &vec![from as u64 + 100]);
+            }
+        }
+    }
+
+    #[test]
+    fn reductions_agree_on_every_part_and_match_one_sum() {
+        let terms: Vec<f64> = (0..300)
+            .map(|k| (k as f64 * 0.37).sin() * 10f64.powi(k % 9))
+            .collect();
+        let whole = super::super::exact_sum(terms.iter().copied());
+        let results = on_threads(4, |t| {
+            let mut sums = [ExactSum::new(), ExactSum::new()];
+            for (k, &x) in terms.iter().enumerate() {
+                if k % 4 == t.rank() {
+                    sums[0].add(x);
+                    sums[1].add(-2.0 * x);
+                }
+            }
+            sum_over_parts(t, &mut sums);
+            let max = max_over_parts(t, t.rank() as f64);
+            let all = all_parts(t, t.rank() != 2);
+            (sums[0].value(), sums[1].value(), max, all)
+        });
+        for (sum, twice, max, all) in results {
+            assert_eq!(sum.to_bits(), whole.to_bits());
+            assert_eq!(twice.to_bits(), (-2.0 * whole).to_bits());
+            assert_eq!(max, 3.0);
+            assert!(!all);
+        }
+    }
+}

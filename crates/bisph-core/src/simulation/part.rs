@@ -1,0 +1,415 @@
+//! A simulation as one part of a run split over several ([`Simulation::part_of`]).
+//!
+//! The fluid is divided into regions by recursive coordinate bisection ([`bisect`]); a part
+//! owns the particles in its region and holds copies of the others' particles within reach of
+//! it (its halo). Its particles are stored owned first, then the halo by sending part.
+//!
+//! Every part runs the same steps. A particle's rates depend only on the particles within
+//! reach, in an order fixed by the cell lattice and the global ids, so each part computes its
+//! own particles' rates with the bits of a single run. Everything else stays identical through
+//! these rules:
+//! - updates that act on one particle at a time (kicks, drifts, bounces, gamma) run on the
+//!   halo too, on the same inputs, so they give the owners' bits;
+//! - the results of neighbour sums (rates, summation densities) are copied from the owners to
+//!   the halos right after they are computed ([`Simulation::refresh_halo`]);
+//! - sums over particles or wall elements are exact ([`ExactSum`]) over what each part owns
+//!   (a wall element belongs to the part whose region holds its centre) and added over the
+//!   parts, maxima are taken over the parts, and the decisions that follow (time step,
+//!   neighbour-list rebuilds, midpoint convergence, errors) are the same on every part;
+//! - at each neighbour-list rebuild, particles that left the region move to their new owner
+//!   and the halos are selected again ([`Simulation::repartition`]).
+
+use super::Simulation;
+use crate::decomposition::{
+    all_gather, all_parts, bisect, max_over_parts, select_halos, sum_over_parts, Bounds,
+    Decomposition, ExactSum, Message, Transport,
+};
+use crate::dim::Vector;
+use crate::error::SimError;
+use crate::particles::{Fluid, PermuteScratch};
+
+/// What makes a simulation one part of a decomposed run.
+#[derive(Debug)]
+pub(crate) struct Part<V: Vector> {
+    transport: Box<dyn Transport>,
+    decomposition: Decomposition<V>,
+    /// Particles `0..owned` are this part's own; the rest are its halo.
+    owned: usize,
+    /// For each part, the own particles it holds in its halo, in the order it stores them.
+    send: Vec<Vec<u32>>,
+    /// How far outside its region a part needs the particles, besides the skin of the
+    /// neighbour list: two kernel supports and twice the largest element reach (a particle
+    /// sums over wall points within a support, and the wall values there are sums over the
+    /// fluid within a support of an element's quadrature points).
+    reach: f64,
+    /// Particles this part has handed to others since it was built.
+    departed: u64,
+}
+
+/// The results of neighbour sums copied from the owners to the halos.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum HaloFields {
+    /// Accelerations and density rates.
+    Rates,
+    /// Densities (by summation).
+    Density,
+}
+
+/// A particle whose state stops the run ([`Simulation::check_state`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BadParticle {
+    id: u32,
+    /// 0: position not finite, 1: velocity not finite, 2: density not finite and positive,
+    /// 3: outside the domain.
+    quantity: u8,
+    position: [f64; 3],
+}
+
+impl BadParticle {
+    pub(crate) fn new(id: u32, quantity: u8, position: [f64; 3]) -> Self {
+        BadParticle {
+            id,
+            quantity,
+            position,
+        }
+    }
+
+    pub(crate) fn id(&self) -> u32 {
+        self.id
+    }
+
+    fn to_words(self) -> Message {
+        let mut words = vec![u64::from(self.id), u64::from(self.quantity)];
+        words.extend(self.position.map(f64::to_bits));
+        words
+    }
+
+    fn from_words(words: &[u64]) -> Self {
+        BadParticle {
+            id: words[0] as u32,
+            quantity: words[1] as u8,
+            position: [2, 3, 4].map(|k| f64::from_bits(words[k])),
+        }
+    }
+
+    /// The error naming this particle.
+    pub(crate) fn error(self, step: u64, time: f64) -> SimError {
+        let quantity = match self.quantity {
+            0 => "position",
+            1 => "velocity",
+            2 => "density",
+            _ => {
+                return SimError::LeftDomain {
+                    particle: self.id,
+                    position: self.position,
+                    step,
+                    time,
+                }
+            }
+        };
+        SimError::NonFinite {
+            particle: self.id,
+            quantity,
+            step,
+            time,
+        }
+    }
+}
+
+impl<V: Vector> Simulation<V> {
+    /// The part `transport.rank()` of a run of the simulation `whole` split into
+    /// `transport.parts()` parts (see the module documentation). Every part must be built
+    /// at once, each on its own thread or process with its end of the transport: building
+    /// exchanges the halos. `whole` must hold the whole fluid and no neighbour list (just
+    /// built, or restored): its next steps and those of its parts then give the same bits.
+    ///
+    /// # Panics
+    /// When `whole` is itself a part.
+    pub fn part_of(whole: &Simulation<V>, transport: Box<dyn Transport>) -> Simulation<V> {
+        assert!(whole.part.is_none(), "a part cannot be split again");
+        let config = &whole.config;
+        let period = config.periodicity;
+        let mut domain: Bounds<V> = Bounds::everywhere();
+        for k in (0..V::DIM).filter(|&k| period.is_periodic(k)) {
+            domain.lo.set(k, period.min.get(k));
+            domain.hi.set(k, period.min.get(k) + period.length.get(k));
+        }
+        let f = &whole.fluid;
+        let weights = vec![1.0; f.len()];
+        let decomposition = bisect(&f.position, &weights, &f.id, transport.parts(), domain);
+        let rank = transport.rank();
+        let own: Vec<u32> = (0..f.len() as u32)
+            .filter(|&i| decomposition.owner(f.position[i as usize]) == rank)
+            .collect();
+        let mut fluid = f.clone();
+        fluid.hold_earlier_rates();
+        fluid.permute(&own, &mut PermuteScratch::default());
+        let reach = 2.0 * (config.kernel.support + whole.walls.elements.max_reach);
+        let mut part = Simulation::new_part(whole, fluid);
+        part.part = Some(Part {
+            transport,
+            decomposition,
+            owned: own.len(),
+            send: Vec::new(),
+            reach,
+            departed: 0,
+        });
+        part.select_halo();
+        part.rebuild_grid(false);
+        part
+    }
+
+    /// Number of parts of the run (1 for a whole simulation).
+    pub fn parts(&self) -> usize {
+        self.part.as_ref().map_or(1, |p| p.transport.parts())
+    }
+
+    /// This part's number (0 for a whole simulation).
+    pub fn rank(&self) -> usize {
+        self.part.as_ref().map_or(0, |p| p.transport.rank())
+    }
+
+    /// Number of particles this simulation owns: they are stored first in
+    /// [`Simulation::fluid`], before the halo (all of them for a whole simulation).
+    pub fn owned_len(&self) -> usize {
+        self.part.as_ref().map_or(self.fluid.len(), |p| p.owned)
+    }
+
+    /// Number of halo particles this part holds (0 for a whole simulation).
+    pub fn halo_len(&self) -> usize {
+        self.fluid.len() - self.owned_len()
+    }
+
+    /// Number of particles this part has handed to other parts since it was built (0 for a
+    /// whole simulation).
+    pub fn departed(&self) -> u64 {
+        self.part.as_ref().map_or(0, |p| p.departed)
+    }
+
+    /// The own particles of every part, in increasing id, with their whole records (a whole
+    /// simulation gives its own particles). Every part must call it, and each gets them all.
+    pub fn gathered_fluid(&self) -> Fluid<V> {
+        let mut fluid = match &self.part {
+            None => self.fluid.clone(),
+            Some(part) => {
+                let mut words = Vec::new();
+                self.fluid.encode(0..part.owned, &mut words);
+                let mut fluid = Fluid::default();
+                for words in all_gather(part.transport.as_ref(), words) {
+                    fluid.append_encoded(&words);
+                }
+                fluid
+            }
+        };
+        let mut by_id: Vec<u32> = (0..fluid.len() as u32).collect();
+        by_id.sort_unstable_by_key(|&i| fluid.id[i as usize]);
+        fluid.permute(&by_id, &mut PermuteScratch::default());
+        fluid
+    }
+
+    /// Adds `sums` over the parts (nothing to do for a whole simulation).
+    pub(crate) fn sum_over_parts(&self, sums: &mut [ExactSum]) {
+        if let Some(part) = &self.part {
+            sum_over_parts(part.transport.as_ref(), sums);
+        }
+    }
+
+    /// `sum f(i)` over the particles of every part, each counted by its owner, exactly.
+    pub(crate) fn sum_owned(&self, f: impl Fn(usize) -> f64 + Sync) -> f64 {
+        let mut sum = [crate::energy::exact_partial_sum(self.owned_len(), f)];
+        self.sum_over_parts(&mut sum);
+        sum[0].value()
+    }
+
+    /// The largest `value` over the parts.
+    pub(crate) fn max_over_parts(&self, value: f64) -> f64 {
+        match &self.part {
+            Some(part) => max_over_parts(part.transport.as_ref(), value),
+            None => value,
+        }
+    }
+
+    /// `true` when `value` holds on every part.
+    pub(crate) fn on_all_parts(&self, value: bool) -> bool {
+        match &self.part {
+            Some(part) => all_parts(part.transport.as_ref(), value),
+            None => value,
+        }
+    }
+
+    /// Whether this simulation counts wall element `j` in sums over the elements: the part
+    /// whose region holds its centre does (a whole simulation counts every element).
+    pub(crate) fn element_counter(&self) -> impl Fn(usize) -> bool + '_ {
+        let centres = &self.walls.elements.centre;
+        move |j| self.owns_point(centres[j])
+    }
+
+    /// Whether this simulation samples at the point `x`: the part whose region holds it does
+    /// (a whole simulation samples everywhere).
+    pub(crate) fn owns_point(&self, x: V) -> bool {
+        self.part.as_ref().is_none_or(|part| {
+            let x = self.config.periodicity.wrap(x);
+            part.decomposition.owner(x) == part.transport.rank()
+        })
+    }
+
+    /// Of the bad particles of every part, the one with the lowest id.
+    pub(crate) fn first_bad_over_parts(&self, bad: Option<BadParticle>) -> Option<BadParticle> {
+        let Some(part) = &self.part else {
+            return bad;
+        };
+        let words = bad.map(BadParticle::to_words).unwrap_or_default();
+        all_gather(part.transport.as_ref(), words)
+            .iter()
+            .filter(|m| !m.is_empty())
+            .map(|m| BadParticle::from_words(m))
+            .min_by_key(|b| b.id)
+    }
+
+    /// Copies `fields` of every halo particle from its owner (nothing to do for a whole
+    /// simulation).
+    pub(crate) fn refresh_halo(&mut self, fields: HaloFields) {
+        let Some(part) = &self.part else {
+            return;
+        };
+        let f = &mut self.fluid;
+        let outgoing = part
+            .send
+            .iter()
+            .map(|indices| {
+                let mut words = Vec::new();
+                for &i in indices {
+                    halo_words(f, i as usize, fields, &mut words);
+                }
+                words
+            })
+            .collect();
+        let incoming = part.transport.exchange(outgoing);
+        let mut slot = part.owned;
+        for words in &incoming {
+            let mut next = words.iter().map(|&w| f64::from_bits(w));
+            while next.len() > 0 {
+                set_halo(f, slot, fields, &mut next);
+                slot += 1;
+            }
+        }
+        debug_assert_eq!(slot, f.len(), "every halo particle refreshed");
+    }
+
+    /// Moves the particles that left this part's region to their owners, stores the own
+    /// particles in the cell grid's order when `sort`, and selects the halo again (the
+    /// particles of other parts within the reach and the skin of the region). Nothing to do
+    /// for a whole simulation.
+    pub(crate) fn repartition(&mut self, sort: bool) {
+        let Some(part) = &self.part else {
+            return;
+        };
+        let rank = part.transport.rank();
+        let scratch = &mut self.scratch.permute;
+        let f = &mut self.fluid;
+        f.truncate(part.owned);
+        let owners = part.decomposition.owners(&f.position);
+        let mut outgoing = vec![Vec::new(); part.transport.parts()];
+        for (i, &owner) in owners.iter().enumerate() {
+            if owner != rank {
+                f.encode([i], &mut outgoing[owner]);
+            }
+        }
+        let staying: Vec<u32> = (0..f.len() as u32)
+            .filter(|&i| owners[i as usize] == rank)
+            .collect();
+        let departed = (f.len() - staying.len()) as u64;
+        f.permute(&staying, scratch);
+        for words in part.transport.exchange(outgoing) {
+            f.append_encoded(&words);
+        }
+        if sort {
+            self.fluid_grid.rebuild_keyed(&f.position, &f.id);
+            f.permute(self.fluid_grid.sorted_items(), scratch);
+        }
+        if let Some(part) = &mut self.part {
+            part.owned = f.len();
+            part.departed += departed;
+        }
+        self.select_halo();
+    }
+
+    /// Selects the halo of the own particles and appends it (see the module documentation).
+    fn select_halo(&mut self) {
+        let Some(part) = &mut self.part else {
+            return;
+        };
+        let (rank, parts) = (part.transport.rank(), part.transport.parts());
+        let f = &mut self.fluid;
+        let width = part.reach + self.scratch.skin;
+        let period = self.config.periodicity;
+        let owners = vec![rank; part.owned];
+        let halos = select_halos(
+            &part.decomposition,
+            &f.position,
+            &f.id,
+            &owners,
+            width,
+            &period,
+        );
+        // The periodic cell grid finds the images itself: each particle is sent once,
+        // where it is stored, and a part's own images need no copy.
+        part.send = halos
+            .into_iter()
+            .enumerate()
+            .map(|(q, entries)| {
+                let mut indices: Vec<u32> = if q == rank {
+                    Vec::new()
+                } else {
+                    entries.iter().map(|e| e.index as u32).collect()
+                };
+                indices.dedup();
+                indices
+            })
+            .collect();
+        let outgoing: Vec<Message> = part
+            .send
+            .iter()
+            .map(|indices| {
+                let mut words = Vec::new();
+                f.encode(indices.iter().map(|&i| i as usize), &mut words);
+                words
+            })
+            .collect();
+        debug_assert_eq!(outgoing.len(), parts);
+        for words in part.transport.exchange(outgoing) {
+            f.append_encoded(&words);
+        }
+    }
+}
+
+/// Appends the `fields` of particle `i` to `out`.
+fn halo_words<V: Vector>(f: &Fluid<V>, i: usize, fields: HaloFields, out: &mut Message) {
+    match fields {
+        HaloFields::Rates => {
+            let a = f.acceleration[i];
+            out.extend((0..V::DIM).map(|k| a.get(k).to_bits()));
+            out.push(f.density_rate[i].to_bits());
+        }
+        HaloFields::Density => out.push(f.density[i].to_bits()),
+    }
+}
+
+/// Sets the `fields` of particle `i` from the values `next` (written by [`halo_words`]).
+fn set_halo<V: Vector>(
+    f: &mut Fluid<V>,
+    i: usize,
+    fields: HaloFields,
+    next: &mut impl Iterator<Item = f64>,
+) {
+    let mut value = || next.next().unwrap_or(f64::NAN);
+    match fields {
+        HaloFields::Rates => {
+            for k in 0..V::DIM {
+                f.acceleration[i].set(k, value());
+            }
+            f.density_rate[i] = value();
+        }
+        HaloFields::Density => f.density[i] = value(),
+    }
+}

@@ -1,0 +1,121 @@
+//! A run split into parts, each a thread with its end of an in-process transport, gives the
+//! bits of the whole run: the energy budget, the bodies' motion, the probes and the time step
+//! at every step, and every particle's final state, for 1 to 4 parts.
+
+// Shared with the MPI test, which uses all of it.
+#[allow(dead_code)]
+#[path = "support/split_runs.rs"]
+mod split_runs;
+
+use bisph_core::decomposition::InProcess;
+use bisph_core::dim::Vector;
+use bisph_core::Simulation;
+use bisph_io::case::CaseDim;
+use split_runs::{advance, built, SplitCase, Trace, SPLIT_CASES};
+
+/// What one split run did besides its trace: particles handed between parts and halo
+/// particles held at the end, summed over the parts.
+struct Traffic {
+    departed: u64,
+    halo: usize,
+}
+
+/// The trace of `whole` split into `parts` parts, each on its own thread.
+fn split_run<V: Vector>(whole: &Simulation<V>, parts: usize, steps: usize) -> (Trace, Traffic) {
+    let ends = InProcess::connect(parts);
+    let runs: Vec<(Trace, u64, usize)> = std::thread::scope(|scope| {
+        let runs: Vec<_> = ends
+            .into_iter()
+            .map(|end| {
+                scope.spawn(move || {
+                    let mut part = Simulation::part_of(whole, Box::new(end));
+                    let trace = advance(&mut part, steps);
+                    (trace, part.departed(), part.halo_len())
+                })
+            })
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    let traffic = Traffic {
+        departed: runs.iter().map(|r| r.1).sum(),
+        halo: runs.iter().map(|r| r.2).sum(),
+    };
+    let mut traces = runs.into_iter().map(|r| r.0);
+    let first = traces.next().unwrap();
+    for other in traces {
+        assert!(other == first, "every part has the same trace");
+    }
+    (first, traffic)
+}
+
+/// Checks that the case split into 1 to 4 parts runs with the bits of the whole; returns the
+/// particles handed between parts in each split run.
+fn check<V: CaseDim>(case: &SplitCase) -> Vec<u64> {
+    let mut whole = built::<V>(case.name, case.overrides);
+    let expected = advance(&mut whole, case.steps);
+    let start = built::<V>(case.name, case.overrides);
+    let mut departed = Vec::new();
+    for parts in 1..=4 {
+        let (trace, traffic) = split_run(&start, parts, case.steps);
+        departed.push(traffic.departed);
+        assert_eq!(traffic.halo > 0, parts > 1, "{parts} parts: halos");
+        assert_eq!(trace.particles.len(), expected.particles.len());
+        for (step, (got, want)) in trace.steps.iter().zip(&expected.steps).enumerate() {
+            assert_eq!(got, want, "{parts} parts, step {}", step + 1);
+        }
+        assert!(
+            trace.particles == expected.particles,
+            "{parts} parts: the final particle states differ"
+        );
+    }
+    departed
+}
+
+#[test]
+fn a_breaking_dam_with_energy_walls() {
+    let departed = check::<glam::DVec2>(&SPLIT_CASES[0]);
+    assert_eq!(departed[0], 0);
+    assert!(
+        departed[1..].iter().all(|&n| n > 0),
+        "handed over: {departed:?}"
+    );
+}
+
+#[test]
+fn a_breaking_dam_in_3d_with_bi_walls_and_geometric_gamma() {
+    let departed = check::<glam::DVec3>(&SPLIT_CASES[1]);
+    assert!(
+        departed[1..].iter().all(|&n| n > 0),
+        "handed over: {departed:?}"
+    );
+}
+
+#[test]
+fn a_piston_under_the_midpoint_scheme() {
+    check::<glam::DVec2>(&SPLIT_CASES[2]);
+}
+
+#[test]
+fn a_free_floating_body() {
+    check::<glam::DVec2>(&SPLIT_CASES[3]);
+}
+
+#[test]
+fn periodic_flow_with_flux_forcing() {
+    check::<glam::DVec2>(&SplitCase {
+        name: "poiseuille-flux.toml",
+        overrides: &["resolution.dx=0.025", "time.dt=2.5e-4"],
+        steps: 50,
+        three_d: false,
+    });
+}
+
+#[test]
+fn semi_analytical_walls() {
+    check::<glam::DVec2>(&SplitCase {
+        name: "usaw-still-water.toml",
+        overrides: &[],
+        steps: 20,
+        three_d: false,
+    });
+}

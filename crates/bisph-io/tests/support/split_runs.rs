@@ -1,0 +1,116 @@
+//! Runs of a case whole and split into parts, recorded bit for bit for comparison.
+
+use bisph_core::dim::Vector;
+use bisph_core::{EnergyBudget, Simulation};
+use bisph_io::case::{build_simulation, load_case, CaseDim};
+use std::path::PathBuf;
+
+/// The case `name` of the project's `cases` folder with `overrides`, built.
+pub fn built<V: CaseDim>(name: &str, overrides: &[&str]) -> Simulation<V> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../cases")
+        .join(name);
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    build_simulation(&load_case(Some(&path), &overrides).unwrap()).unwrap()
+}
+
+/// What a run is compared by, as bits: per step, the time, the energy budget, the bodies'
+/// velocities and the probes; at the end, each particle's id, density, position and velocity
+/// (in id order, gathered from every part).
+#[derive(Debug, PartialEq)]
+pub struct Trace {
+    pub steps: Vec<(u64, Vec<u64>, Vec<u64>)>,
+    pub particles: Vec<Vec<u64>>,
+}
+
+impl Trace {
+    /// The trace as text, a line per step and per particle.
+    pub fn lines(&self) -> Vec<String> {
+        let steps = self.steps.iter().map(|s| format!("step {s:?}"));
+        let particles = self.particles.iter().map(|p| format!("particle {p:?}"));
+        steps.chain(particles).collect()
+    }
+}
+
+fn bits(values: impl IntoIterator<Item = f64>) -> Vec<u64> {
+    values.into_iter().map(f64::to_bits).collect()
+}
+
+fn budget_bits(e: &EnergyBudget) -> Vec<u64> {
+    bits([
+        e.kinetic,
+        e.compressible,
+        e.potential,
+        e.wall_work,
+        e.viscous_dissipation,
+        e.forcing_work,
+        e.diffusion_dissipation,
+        e.total,
+    ])
+}
+
+/// Advances `sim` (whole, or a part: then every part must call it) `steps` steps and records
+/// its trace.
+pub fn advance<V: Vector>(sim: &mut Simulation<V>, steps: usize) -> Trace {
+    let mut trace = Trace {
+        steps: Vec::new(),
+        particles: Vec::new(),
+    };
+    for _ in 0..steps {
+        sim.advance(None).unwrap();
+        let mut bodies = bits(sim.walls.dynamic_velocities());
+        bodies.extend(bits(sim.sample_probes()));
+        let budget = budget_bits(&sim.energy());
+        trace.steps.push((sim.time.to_bits(), budget, bodies));
+    }
+    let f = sim.gathered_fluid();
+    for i in 0..f.len() {
+        let mut record = vec![u64::from(f.id[i]), f.density[i].to_bits()];
+        record.extend(bits(f.position[i].to_xyz()));
+        record.extend(bits(f.velocity[i].to_xyz()));
+        trace.particles.push(record);
+    }
+    trace
+}
+
+/// A case the split runs are checked on: file, overrides, steps and dimension.
+pub struct SplitCase {
+    pub name: &'static str,
+    pub overrides: &'static [&'static str],
+    pub steps: usize,
+    pub three_d: bool,
+}
+
+/// The cases split runs must reproduce: the explicit scheme with energy walls (2-D) and with
+/// classic walls and the geometric Shepard factor (3-D), long enough for particles to change
+/// parts; the midpoint scheme with a piston and with a free body.
+pub const SPLIT_CASES: [SplitCase; 4] = [
+    SplitCase {
+        name: "dam-break-2d.toml",
+        overrides: &["resolution.dx=0.02"],
+        steps: 1200,
+        three_d: false,
+    },
+    SplitCase {
+        name: "dam-break-3d.toml",
+        overrides: &[
+            "boundary=\"bi\"",
+            "shepard=\"geometric\"",
+            "resolution.dx=0.04",
+        ],
+        steps: 250,
+        three_d: true,
+    },
+    SplitCase {
+        name: "adiabatic-piston.toml",
+        overrides: &[],
+        steps: 40,
+        three_d: false,
+    },
+    SplitCase {
+        name: "floating-box-2d.toml",
+        overrides: &["resolution.dx=0.04"],
+        steps: 40,
+        three_d: false,
+    },
+];
