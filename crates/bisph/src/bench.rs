@@ -29,6 +29,7 @@
 //! Each is refined to the particle count from its shipped case file, early in the flow (the
 //! first steps after release; the capsule starts with its lowest point on the water).
 
+use bisph_core::decomposition::Transport;
 use bisph_core::Simulation;
 use bisph_io::case::{build_simulation, CaseDim};
 use bisph_io::case::{parse_case, LoadedCase};
@@ -169,6 +170,13 @@ pub struct BenchArgs {
     single: Option<String>,
 }
 
+impl BenchArgs {
+    /// `true` for one configuration run in this process (`--single`).
+    pub fn is_single(&self) -> bool {
+        self.single.is_some()
+    }
+}
+
 /// One configuration of the suite.
 #[derive(Clone, Copy, Debug)]
 struct Config {
@@ -226,8 +234,12 @@ impl Config {
 
 pub fn bench(args: BenchArgs) -> Result<(), (u8, String)> {
     if let Some(single) = &args.single {
-        let result = run_single(Config::parse(single).map_err(|e| (1, e))?)?;
-        println!("{result}");
+        let config = Config::parse(single).map_err(|e| (1, e))?;
+        let transport = crate::launch::rank_transport()?;
+        // Split over the ranks of a parallel launch, the first one reports.
+        if let Some(result) = run_single(config, transport)? {
+            println!("{result}");
+        }
         return Ok(());
     }
     let dam = BenchCase::DamBreak;
@@ -470,7 +482,12 @@ fn print_row(row: &Value) {
 }
 
 /// Runs one configuration in this process.
-fn run_single(config: Config) -> Result<Value, (u8, String)> {
+/// Runs one configuration in this process, or this rank's part of it when `transport` joins
+/// the processes of a parallel launch; the result, on the first rank.
+fn run_single(
+    config: Config,
+    transport: Option<Box<dyn Transport>>,
+) -> Result<Option<Value>, (u8, String)> {
     let baseline = memory_kib("VmRSS:").unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(config.threads)
@@ -509,8 +526,8 @@ fn run_single(config: Config) -> Result<Value, (u8, String)> {
     }
     let loaded = parse_case("<bench>", text, &overrides).map_err(|e| (1, e.to_string()))?;
     pool.install(|| match config.dim {
-        2 => measure::<DVec2>(&loaded, config, baseline),
-        _ => measure::<DVec3>(&loaded, config, baseline),
+        2 => measure::<DVec2>(&loaded, config, baseline, transport),
+        _ => measure::<DVec3>(&loaded, config, baseline, transport),
     })
 }
 
@@ -518,13 +535,24 @@ fn measure<V: CaseDim>(
     loaded: &LoadedCase,
     config: Config,
     baseline_kib: u64,
-) -> Result<Value, (u8, String)> {
-    let mut sim: Simulation<V> = build_simulation(loaded).map_err(|e| (1, e.to_string()))?;
+    transport: Option<Box<dyn Transport>>,
+) -> Result<Option<Value>, (u8, String)> {
+    let whole: Simulation<V> = build_simulation(loaded).map_err(|e| (1, e.to_string()))?;
+    let mut sim = match transport {
+        Some(transport) => {
+            let part = Simulation::part_of(&whole, transport);
+            drop(whole);
+            part
+        }
+        None => whole,
+    };
     for _ in 0..3 {
         sim.advance(None).map_err(|e| (3, e.to_string()))?;
     }
     let pairs_per_step = sim.count_pairs() as f64;
     sim.timings = Default::default();
+    let traffic_before = sim.traffic().unwrap_or_default();
+    let departed_before = sim.departed();
     let mut step_seconds = Vec::with_capacity(config.steps as usize);
     let mut evaluations = 0u64;
     for _ in 0..config.steps {
@@ -535,20 +563,32 @@ fn measure<V: CaseDim>(
     }
     let seconds: f64 = step_seconds.iter().sum();
     let median = median_of(&mut step_seconds);
-    let n = sim.fluid.len() as f64;
+    let n = sim.fluid_count() as f64;
     let steps = config.steps as f64;
     let peak = memory_kib("VmHWM:")
         .unwrap_or(0)
         .saturating_sub(baseline_kib);
     let t = sim.timings;
     let pairs = pairs_per_step * steps / seconds;
-    Ok(json!({
+    // Over the parts of a split run: the largest halo and traffic, the total handed over.
+    let traffic = sim.traffic().unwrap_or_default();
+    let exchanges = (traffic.exchanges - traffic_before.exchanges) as f64 / steps;
+    let words = sim.max_over_parts((traffic.words_sent - traffic_before.words_sent) as f64);
+    let exchange_seconds = sim.max_over_parts(traffic.seconds - traffic_before.seconds);
+    let halo = sim.max_over_parts(sim.halo_len() as f64);
+    let handed = sim.total_over_parts((sim.departed() - departed_before) as f64);
+    let peak = sim.max_over_parts((peak * 1024) as f64);
+    if sim.rank() != 0 {
+        return Ok(None);
+    }
+    Ok(Some(json!({
         "case": match (config.case, config.dim) {
             (BenchCase::DamBreak, 2) => "dam-break-2d",
             (BenchCase::DamBreak, _) => "dam-break-3d",
             (other, _) => other.name(),
         },
         "dim": config.dim, "h_over_dx": config.h_over_dx, "threads": config.threads,
+        "ranks": sim.parts(),
         "particles": n, "wall_elements": sim.walls.elements.len(), "steps": config.steps,
         "neighbours_per_particle": pairs_per_step / n,
         "particle_steps_per_second": n * steps / seconds,
@@ -556,12 +596,16 @@ fn measure<V: CaseDim>(
         "seconds_per_step": seconds / steps,
         "seconds_per_step_median": median,
         "particle_steps_per_second_median": n / median,
-        "seconds_neighbour_search": t.neighbours - t.reorder, "seconds_reorder": t.reorder,
+        "seconds_neighbour_search": t.neighbours - t.reorder - t.handover,
+        "seconds_reorder": t.reorder,
         "seconds_forces": t.rates - t.wall_pressure, "seconds_wall_pressure": t.wall_pressure,
         "seconds_integration": t.steps - t.neighbours - t.rates, "seconds_steps": t.steps,
-        "peak_bytes_per_particle": (peak * 1024) as f64 / n,
+        "seconds_handover": t.handover, "seconds_exchange_max": exchange_seconds,
+        "exchanges_per_step": exchanges, "words_sent_per_step_max": words / steps,
+        "halo_particles_max": halo, "particles_handed_over": handed,
+        "peak_bytes_per_particle": peak / n * sim.parts() as f64,
         "evaluations_per_step": evaluations as f64 / steps,
-    }))
+    })))
 }
 
 /// Median of the step times: on a shared machine, steps slowed by other processes move the

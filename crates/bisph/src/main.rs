@@ -2,6 +2,7 @@
 
 mod bench;
 mod estimates;
+mod launch;
 mod progress;
 
 use bisph_io::{load_case, resume_case, run_case_with, RunError, RunOptions};
@@ -127,17 +128,21 @@ const EXIT_INTERRUPTED: u8 = 10;
 /// (checkpoint written), 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = one_process().and_then(|()| match cli.command {
-        None => run(RunArgs {
-            progress_interval: progress::DEFAULT_INTERVAL,
-            ..RunArgs::default()
+    let result = match cli.command {
+        // One configuration splits over the ranks of a parallel launch.
+        Some(Command::Bench(args)) if args.is_single() => bench::bench(args),
+        command => launch::one_process().and_then(|()| match command {
+            None => run(RunArgs {
+                progress_interval: progress::DEFAULT_INTERVAL,
+                ..RunArgs::default()
+            }),
+            Some(Command::Run(args)) => run(args),
+            Some(Command::Bench(args)) => bench::bench(args),
+            Some(Command::Validate(args)) => validate(args),
+            Some(Command::Shepard(args)) => shepard(args),
+            Some(Command::Pack(args)) => pack(args),
         }),
-        Some(Command::Run(args)) => run(args),
-        Some(Command::Bench(args)) => bench::bench(args),
-        Some(Command::Validate(args)) => validate(args),
-        Some(Command::Shepard(args)) => shepard(args),
-        Some(Command::Pack(args)) => pack(args),
-    });
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // An interrupt is what the user asked for, not an error: its line says where the
@@ -151,32 +156,6 @@ fn main() -> ExitCode {
             ExitCode::from(code)
         }
     }
-}
-
-/// Refuses a start as one of several processes of a parallel launcher (`mpirun -np K`,
-/// `srun` with several tasks, ...): each would run the whole case and write the same outputs.
-fn one_process() -> Result<(), (u8, String)> {
-    /// Where Open MPI, MPICH (and the PMI launchers, Slurm's included) and MVAPICH give the
-    /// number of processes they started.
-    const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"];
-    for name in SIZE_VARIABLES {
-        let Ok(value) = std::env::var(name) else {
-            continue;
-        };
-        let count = value.trim();
-        if count.parse::<u64>().is_ok_and(|n| n > 1) {
-            return Err((
-                1,
-                format!(
-                    "started as one of {count} processes ({name} = {count}): each would run the \
-                     whole case and write the same outputs; expected one process (bisph uses \
-                     every core through threads, `--threads N`): start it without the \
-                     launcher, or with -np 1"
-                ),
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// Sets the size of rayon's global pool.

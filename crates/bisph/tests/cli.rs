@@ -1098,3 +1098,22 @@ fn several_processes_of_a_parallel_launcher_are_refused() {
         assert!(with(name, "1").status.success(), "{name} = 1 refused");
     }
 }
+
+/// `bisph bench --single` splits over the ranks of a parallel launch only when built with
+/// MPI; without it the start is refused, naming the feature.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_split_bench_needs_the_mpi_feature() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_bisph"))
+        .args(["bench", "--single", "dam-break,2,2000,2,1,3"])
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("started as one of 2 processes") && err.contains("--features mpi"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty(), "something ran");
+}

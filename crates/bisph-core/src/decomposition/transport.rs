@@ -11,7 +11,9 @@
 
 use super::ExactSum;
 use std::fmt;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Barrier, Mutex};
+use std::time::Instant;
 
 /// The words a part sends to or receives from another.
 pub type Message = Vec<u64>;
@@ -78,6 +80,74 @@ pub fn all_parts(transport: &dyn Transport, value: bool) -> bool {
     all_gather(transport, vec![u64::from(value)])
         .iter()
         .all(|m| m[0] == 1)
+}
+
+/// What a part's exchanges cost so far ([`Counted`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Traffic {
+    /// Exchanges made.
+    pub exchanges: u64,
+    /// Words sent to other parts.
+    pub words_sent: u64,
+    /// Wall-clock seconds spent in exchanges (waiting for the other parts included).
+    pub seconds: f64,
+}
+
+/// A transport that counts its exchanges, the words sent and the time spent in them.
+#[derive(Debug)]
+pub struct Counted {
+    inner: Box<dyn Transport>,
+    exchanges: AtomicU64,
+    words_sent: AtomicU64,
+    nanoseconds: AtomicU64,
+}
+
+impl Counted {
+    /// Counts the exchanges of `inner`.
+    pub fn new(inner: Box<dyn Transport>) -> Self {
+        Counted {
+            inner,
+            exchanges: AtomicU64::new(0),
+            words_sent: AtomicU64::new(0),
+            nanoseconds: AtomicU64::new(0),
+        }
+    }
+
+    /// The exchanges so far.
+    pub fn traffic(&self) -> Traffic {
+        Traffic {
+            exchanges: self.exchanges.load(Ordering::Relaxed),
+            words_sent: self.words_sent.load(Ordering::Relaxed),
+            seconds: self.nanoseconds.load(Ordering::Relaxed) as f64 * 1e-9,
+        }
+    }
+}
+
+impl Transport for Counted {
+    fn rank(&self) -> usize {
+        self.inner.rank()
+    }
+
+    fn parts(&self) -> usize {
+        self.inner.parts()
+    }
+
+    fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message> {
+        let start = Instant::now();
+        let rank = self.rank();
+        let words: usize = outgoing
+            .iter()
+            .enumerate()
+            .filter(|&(q, _)| q != rank)
+            .map(|(_, m)| m.len())
+            .sum();
+        let incoming = self.inner.exchange(outgoing);
+        let nanoseconds = start.elapsed().as_nanos() as u64;
+        self.exchanges.fetch_add(1, Ordering::Relaxed);
+        self.words_sent.fetch_add(words as u64, Ordering::Relaxed);
+        self.nanoseconds.fetch_add(nanoseconds, Ordering::Relaxed);
+        incoming
+    }
 }
 
 /// Parts as threads of one process: [`InProcess::connect`] gives one end per part, each to be

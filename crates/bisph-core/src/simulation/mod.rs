@@ -61,6 +61,8 @@ pub struct PhaseTimes {
     pub neighbours: f64,
     /// Of which reordering the particles by cell.
     pub reorder: f64,
+    /// Of which, in a decomposed run, handing particles to other parts and selecting the halo.
+    pub handover: f64,
     /// Rate evaluations: equation of state, fluid and wall terms, wall pressures.
     pub rates: f64,
     /// Of which the wall pressures (extrapolation to the elements before the sweep).
@@ -489,11 +491,12 @@ impl<V: Vector> Simulation<V> {
         self.config.wall_model.summation_density()
     }
 
-    /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions.
+    /// `sum_P m_j W_ij` over fluid and vertex particles at the current positions, for the own
+    /// particles.
     fn kernel_sums(&self) -> Vec<f64> {
         let kernel = self.config.kernel;
         let (f, v, grid) = (&self.fluid, &self.vertices, &self.fluid_grid);
-        (0..f.len())
+        (0..self.owned_len())
             .into_par_iter()
             .map(|i| {
                 let x = f.position[i];
@@ -517,8 +520,10 @@ impl<V: Vector> Simulation<V> {
     pub(crate) fn summation_densities(&mut self, dt: f64) {
         let sums = self.kernel_sums();
         let f = &mut self.fluid;
-        for (i, s) in sums.iter().enumerate() {
+        for i in 0..f.len() {
             f.density_offset[i] += dt * f.gamma[i] * f.density_rate[i];
+            // The halo's sums are its owners' (copied below).
+            let s = sums.get(i).copied().unwrap_or(0.0);
             f.density[i] = (s + f.density_offset[i]) / f.gamma[i];
             f.density_rate[i] = 0.0;
         }
@@ -694,7 +699,9 @@ impl<V: Vector> Simulation<V> {
         if self.part.is_some() {
             let start = Instant::now();
             self.repartition(reorder);
-            self.timings.neighbours += start.elapsed().as_secs_f64();
+            let seconds = start.elapsed().as_secs_f64();
+            self.timings.neighbours += seconds;
+            self.timings.handover += seconds;
             self.rebuild_grid(false);
         } else {
             self.rebuild_grid(reorder);
@@ -772,6 +779,7 @@ impl<V: Vector> Simulation<V> {
             self.scratch.pairs_listed = false;
             return;
         }
+        let owned = self.owned_len();
         let position = &self.fluid.position;
         let factor = |r| kernel.gradient_factor(r);
         let s = &mut self.scratch;
@@ -780,8 +788,10 @@ impl<V: Vector> Simulation<V> {
             s.pairs
                 .rebuild_from_candidates(candidates, position, kernel.support, factor);
         } else {
+            // The own particles' pairs: the halo takes its rates from the owners.
+            let queries = &position[..owned];
             s.pairs
-                .rebuild(&self.fluid_grid, position, position, kernel.support, factor);
+                .rebuild(&self.fluid_grid, queries, position, kernel.support, factor);
         }
         s.pairs_listed = true;
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
@@ -830,6 +840,8 @@ impl<V: Vector> Simulation<V> {
         let start = Instant::now();
         let eos = self.config.eos;
         let model = self.rate_model();
+        // The halo takes its rates from the owners afterwards.
+        let owned = self.owned_len();
         let Fluid {
             position,
             mass,
@@ -902,9 +914,9 @@ impl<V: Vector> Simulation<V> {
             neighbours,
             elements,
             wall_grid,
-            acceleration,
-            density_rate,
-            dissipation,
+            acceleration: &mut acceleration[..owned],
+            density_rate: &mut density_rate[..owned],
+            dissipation: &mut dissipation[..owned],
         };
         self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
         let d = &self.scratch.dissipation;
@@ -1121,12 +1133,12 @@ impl<V: Vector> Simulation<V> {
         sums.iter().map(ExactSum::value).collect()
     }
 
-    /// Number of fluid-fluid pairs within the support (each own particle counts its
-    /// neighbours, itself included), for throughput figures.
+    /// Number of fluid-fluid pairs within the support (each particle counts its neighbours,
+    /// itself included), over every part, for throughput figures.
     pub fn count_pairs(&self) -> u64 {
         let f = &self.fluid;
         let support = self.config.kernel.support;
-        (0..self.owned_len())
+        let own: u64 = (0..self.owned_len())
             .into_par_iter()
             .map(|i| {
                 let mut n = 0u64;
@@ -1138,7 +1150,8 @@ impl<V: Vector> Simulation<V> {
                 );
                 n
             })
-            .sum()
+            .sum();
+        self.total_over_parts(own as f64) as u64
     }
 
     /// Largest particle acceleration of the last rate evaluation (over every part).

@@ -21,8 +21,8 @@
 
 use super::Simulation;
 use crate::decomposition::{
-    all_gather, all_parts, bisect, max_over_parts, select_halos, sum_over_parts, Bounds,
-    Decomposition, ExactSum, Message, Transport,
+    all_gather, all_parts, bisect, max_over_parts, select_halos, sum_over_parts, Bounds, Counted,
+    Decomposition, ExactSum, Message, Traffic, Transport,
 };
 use crate::dim::Vector;
 use crate::error::SimError;
@@ -31,7 +31,7 @@ use crate::particles::{Fluid, PermuteScratch};
 /// What makes a simulation one part of a decomposed run.
 #[derive(Debug)]
 pub(crate) struct Part<V: Vector> {
-    transport: Box<dyn Transport>,
+    transport: Counted,
     decomposition: Decomposition<V>,
     /// Particles `0..owned` are this part's own; the rest are its halo.
     owned: usize,
@@ -147,7 +147,7 @@ impl<V: Vector> Simulation<V> {
         let reach = 2.0 * (config.kernel.support + whole.walls.elements.max_reach);
         let mut part = Simulation::new_part(whole, fluid);
         part.part = Some(Part {
-            transport,
+            transport: Counted::new(transport),
             decomposition,
             owned: own.len(),
             send: Vec::new(),
@@ -180,6 +180,12 @@ impl<V: Vector> Simulation<V> {
         self.fluid.len() - self.owned_len()
     }
 
+    /// What this part's exchanges with the others cost so far (`None` for a whole
+    /// simulation).
+    pub fn traffic(&self) -> Option<Traffic> {
+        self.part.as_ref().map(|p| p.transport.traffic())
+    }
+
     /// Number of particles this part has handed to other parts since it was built (0 for a
     /// whole simulation).
     pub fn departed(&self) -> u64 {
@@ -195,7 +201,7 @@ impl<V: Vector> Simulation<V> {
                 let mut words = Vec::new();
                 self.fluid.encode(0..part.owned, &mut words);
                 let mut fluid = Fluid::default();
-                for words in all_gather(part.transport.as_ref(), words) {
+                for words in all_gather(&part.transport, words) {
                     fluid.append_encoded(&words);
                 }
                 fluid
@@ -210,8 +216,21 @@ impl<V: Vector> Simulation<V> {
     /// Adds `sums` over the parts (nothing to do for a whole simulation).
     pub(crate) fn sum_over_parts(&self, sums: &mut [ExactSum]) {
         if let Some(part) = &self.part {
-            sum_over_parts(part.transport.as_ref(), sums);
+            sum_over_parts(&part.transport, sums);
         }
+    }
+
+    /// The sum of every part's `value` (exact; the value itself for a whole simulation).
+    pub fn total_over_parts(&self, value: f64) -> f64 {
+        let mut sum = [ExactSum::new()];
+        sum[0].add(value);
+        self.sum_over_parts(&mut sum);
+        sum[0].value()
+    }
+
+    /// Number of fluid particles of the whole run (the own particles of every part).
+    pub fn fluid_count(&self) -> usize {
+        self.total_over_parts(self.owned_len() as f64) as usize
     }
 
     /// `sum f(i)` over the particles of every part, each counted by its owner, exactly.
@@ -221,10 +240,10 @@ impl<V: Vector> Simulation<V> {
         sum[0].value()
     }
 
-    /// The largest `value` over the parts.
-    pub(crate) fn max_over_parts(&self, value: f64) -> f64 {
+    /// The largest `value` over the parts (the value itself for a whole simulation).
+    pub fn max_over_parts(&self, value: f64) -> f64 {
         match &self.part {
-            Some(part) => max_over_parts(part.transport.as_ref(), value),
+            Some(part) => max_over_parts(&part.transport, value),
             None => value,
         }
     }
@@ -232,7 +251,7 @@ impl<V: Vector> Simulation<V> {
     /// `true` when `value` holds on every part.
     pub(crate) fn on_all_parts(&self, value: bool) -> bool {
         match &self.part {
-            Some(part) => all_parts(part.transport.as_ref(), value),
+            Some(part) => all_parts(&part.transport, value),
             None => value,
         }
     }
@@ -259,7 +278,7 @@ impl<V: Vector> Simulation<V> {
             return bad;
         };
         let words = bad.map(BadParticle::to_words).unwrap_or_default();
-        all_gather(part.transport.as_ref(), words)
+        all_gather(&part.transport, words)
             .iter()
             .filter(|m| !m.is_empty())
             .map(|m| BadParticle::from_words(m))
