@@ -77,7 +77,8 @@ pub fn fluid_energy_sums<V: Vector>(
 }
 
 /// Energy scale used to express drift: the initial kinetic and compressible energy plus the
-/// potential energy above the lowest particle, `sum m |g| (z_i - z_min)`.
+/// potential energy above the lowest particle, `sum m |g| (z_i - z_min)`, of a whole fluid
+/// (a split run: [`crate::Simulation::energy_scale`]).
 pub fn energy_scale<V: Vector>(fluid: &Fluid<V>, eos: &Eos, gravity: V) -> f64 {
     let (kinetic, compressible, _) = fluid_energies(fluid, eos, gravity);
     let heights: Vec<f64> = fluid.position.iter().map(|&r| -gravity.dot(r)).collect();

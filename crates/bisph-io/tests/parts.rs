@@ -67,6 +67,7 @@ fn check<V: CaseDim>(case: &SplitCase) -> Vec<u64> {
             trace.particles == expected.particles,
             "{parts} parts: the final particle states differ"
         );
+        assert_eq!(trace.totals, expected.totals, "{parts} parts: totals");
     }
     departed
 }

@@ -1112,6 +1112,31 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
+    /// Energy scale used to express drift: the kinetic and compressible energy plus the
+    /// potential energy above the lowest particle, `sum m |g| (z_i - z_min)`, over every
+    /// part.
+    pub fn energy_scale(&self) -> f64 {
+        let (f, gravity) = (&self.fluid, self.config.gravity);
+        let e = self.energy();
+        let height = |i: usize| -gravity.dot(f.position[i]);
+        let lowest = (0..self.owned_len())
+            .map(height)
+            .fold(f64::INFINITY, f64::min);
+        let lowest = -self.max_over_parts(-lowest);
+        let available = if lowest.is_finite() {
+            self.sum_owned(|i| f.mass[i] * (height(i) - lowest))
+        } else {
+            0.0
+        };
+        e.kinetic + e.compressible.abs() + available
+    }
+
+    /// Total fluid mass, over every part.
+    pub fn fluid_mass(&self) -> f64 {
+        let mass = &self.fluid.mass;
+        self.sum_owned(|i| mass[i])
+    }
+
     /// Probe values for the current state. A probe is sampled by the part whose region holds
     /// it, or summed over the own particles of every part (heights).
     pub fn sample_probes(&self) -> Vec<f64> {

@@ -15,7 +15,6 @@ use crate::run::error::RunError;
 use crate::run::outputs::Frames;
 use crate::run::settle::SettlingSummary;
 use bisph_core::bodies::Motion;
-use bisph_core::energy::energy_scale;
 use bisph_core::simulation::{MidpointParams, SettleReport};
 use bisph_core::Simulation;
 use serde::Serialize;
@@ -598,7 +597,7 @@ fn start_run<V: CaseDim>(
                 fluid_body_max: 0.0,
                 frames: Frames::new(out)?,
                 counters: RunCounters {
-                    scale: energy_scale(&sim.fluid, &sim.config.eos, sim.config.gravity),
+                    scale: sim.energy_scale(),
                     e0_total: sim.energy().total,
                     ..RunCounters::default()
                 },
@@ -929,7 +928,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                 (bulk - target) / target,
             ])?;
         }
-        let total_mass: f64 = sim.fluid.mass.iter().sum();
+        let total_mass = sim.fluid_mass();
         let force = sim.body_force * total_mass;
         let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
         if V::DIM == 3 {
@@ -945,7 +944,8 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
     /// fluid + bodies energy drift), each piston's row in `bodies.csv`.
     fn write_body_rows(&mut self, sim: &Simulation<V>) -> Result<(), RunError> {
         let t = sim.time;
-        for (b, (force, moment)) in sim.walls.body_loads(t).into_iter().enumerate() {
+        let loads = sim.body_loads();
+        for (b, &(force, moment)) in loads.iter().enumerate() {
             let mut values: Vec<f64> = force.to_xyz()[..V::DIM].to_vec();
             if V::DIM == 3 {
                 values.extend(V::angular_to_vec(moment));
@@ -955,7 +955,6 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             }
         }
         if self.has_free {
-            let loads = sim.walls.body_loads(t);
             let mut k = 0;
             for (b, body) in sim.walls.bodies.iter().enumerate() {
                 if let Motion::Free(f) = &body.motion {
@@ -1126,12 +1125,12 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         Summary {
             case: self.loaded.case.name.clone(),
             dim: V::DIM,
-            fluid_particles: sim.fluid.len(),
+            fluid_particles: sim.fluid_count(),
             boundary_elements: sim.walls.elements.len(),
             steps: sim.step,
             time: sim.time,
             wall_seconds,
-            particle_steps_per_second: sim.fluid.len() as f64 * sim.step as f64
+            particle_steps_per_second: sim.fluid_count() as f64 * sim.step as f64
                 / wall_seconds.max(1e-9),
             phase_seconds: PhaseSeconds::new(&sim.timings, self.started.elapsed().as_secs_f64()),
             energy_drift_relative: (e_final.total - counters.e0_total) / counters.scale,
@@ -1153,9 +1152,10 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             fluid_body_energy_drift_relative: self
                 .has_free
                 .then(|| (fluid_and_body_energy(sim) - self.fluid_body0) / counters.scale),
-            particles_behind_walls: sim
-                .walls
-                .count_behind(&sim.fluid.position, sim.config.kernel.support),
+            particles_behind_walls: sim.total_over_parts(sim.walls.count_behind(
+                &sim.fluid.position[..sim.owned_len()],
+                sim.config.kernel.support,
+            ) as f64) as usize,
             settling,
             stopped: match ending {
                 Ending::Tripped(d) => Some(d.to_string()),

@@ -21,6 +21,9 @@ pub fn built<V: CaseDim>(name: &str, overrides: &[&str]) -> Simulation<V> {
 pub struct Trace {
     pub steps: Vec<(u64, Vec<u64>, Vec<u64>)>,
     pub particles: Vec<Vec<u64>>,
+    /// At the end: the energy scale, the fluid mass, the particle and pair counts, the
+    /// largest speed, the body loads.
+    pub totals: Vec<u64>,
 }
 
 impl Trace {
@@ -28,7 +31,8 @@ impl Trace {
     pub fn lines(&self) -> Vec<String> {
         let steps = self.steps.iter().map(|s| format!("step {s:?}"));
         let particles = self.particles.iter().map(|p| format!("particle {p:?}"));
-        steps.chain(particles).collect()
+        let totals = std::iter::once(format!("totals {:?}", self.totals));
+        steps.chain(particles).chain(totals).collect()
     }
 }
 
@@ -55,6 +59,7 @@ pub fn advance<V: Vector>(sim: &mut Simulation<V>, steps: usize) -> Trace {
     let mut trace = Trace {
         steps: Vec::new(),
         particles: Vec::new(),
+        totals: Vec::new(),
     };
     for _ in 0..steps {
         sim.advance(None).unwrap();
@@ -62,6 +67,17 @@ pub fn advance<V: Vector>(sim: &mut Simulation<V>, steps: usize) -> Trace {
         bodies.extend(bits(sim.sample_probes()));
         let budget = budget_bits(&sim.energy());
         trace.steps.push((sim.time.to_bits(), budget, bodies));
+    }
+    trace.totals = bits([
+        sim.energy_scale(),
+        sim.fluid_mass(),
+        sim.fluid_count() as f64,
+        sim.count_pairs() as f64,
+        sim.max_speed(),
+    ]);
+    for (force, moment) in sim.body_loads() {
+        trace.totals.extend(bits(force.to_xyz()));
+        trace.totals.extend(bits(V::angular_to_vec(moment)));
     }
     let f = sim.gathered_fluid();
     for i in 0..f.len() {
