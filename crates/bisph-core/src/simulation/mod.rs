@@ -842,6 +842,7 @@ impl<V: Vector> Simulation<V> {
         let model = self.rate_model();
         // The halo takes its rates from the owners afterwards.
         let owned = self.owned_len();
+        self.mark_elements_in_reach();
         let Fluid {
             position,
             mass,

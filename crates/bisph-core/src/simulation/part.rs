@@ -272,6 +272,30 @@ impl<V: Vector> Simulation<V> {
         })
     }
 
+    /// Marks the wall elements whose pressure this part needs
+    /// ([`crate::walls::BoundaryElements::in_reach`]): those within a kernel support, an
+    /// element's reach and the skin of its region, where its own particles are. Across
+    /// periodic axes every element is kept. Nothing to do for a whole simulation.
+    pub(crate) fn mark_elements_in_reach(&mut self) {
+        let Some(part) = &self.part else {
+            return;
+        };
+        let e = &mut self.walls.elements;
+        if self.config.periodicity.any() {
+            e.in_reach.clear();
+            return;
+        }
+        let region = part.decomposition.regions()[part.transport.rank()];
+        let reach = self.config.kernel.support + e.max_reach + self.scratch.skin;
+        let (centres, in_reach) = (&e.centre, &mut e.in_reach);
+        in_reach.clear();
+        in_reach.extend(
+            centres
+                .iter()
+                .map(|&c| region.distance_squared(c) <= reach * reach),
+        );
+    }
+
     /// Of the bad particles of every part, the one with the lowest id.
     pub(crate) fn first_bad_over_parts(&self, bad: Option<BadParticle>) -> Option<BadParticle> {
         let Some(part) = &self.part else {

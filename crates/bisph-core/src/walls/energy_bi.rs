@@ -184,8 +184,9 @@ impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
     }
 }
 
-/// Paper 1, eq 71: `P_j = 2 sum_i p_i W_ij V_i` for every element, written into
-/// `elements.pressure` (gathered per element, in parallel).
+/// Paper 1, eq 71: `P_j = 2 sum_i p_i W_ij V_i` for every element in reach
+/// ([`BoundaryElements::in_reach`]), written into `elements.pressure` (gathered per element,
+/// in parallel).
 pub fn wall_pressure<V: Vector>(
     kernel: &Wendland,
     elements: &mut BoundaryElements<V>,
@@ -216,12 +217,15 @@ fn wall_pressure_over<V: Vector>(
     fluid: &FluidState<V>,
     near: ElementNeighbours<'_, V>,
 ) {
-    let centres = &elements.centre;
+    let (centres, in_reach) = (&elements.centre, &elements.in_reach);
     elements
         .pressure
         .par_iter_mut()
         .enumerate()
         .for_each(|(j, pj)| {
+            if !in_reach.is_empty() && !in_reach[j] {
+                return;
+            }
             let mut sum = 0.0;
             let mut add = |i: usize, w: f64| sum += fluid.pressure[i] * fluid.volume[i] * w;
             match near {

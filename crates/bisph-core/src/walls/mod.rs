@@ -47,6 +47,9 @@ pub struct BoundaryElements<V: Vector> {
     /// Wall pressure on each element, refreshed by the wall model before each rate sweep
     /// (paper 1 eq 71 for the energy-conserving walls; extrapolated from the fluid for `bi`).
     pub pressure: Vec<f64>,
+    /// The elements whose wall pressure the rate evaluations refresh (every element when
+    /// empty): a part of a split run needs only those within reach of its own particles.
+    pub in_reach: Vec<bool>,
     /// Centres in the body's reference configuration (time zero).
     pub reference_centre: Vec<V>,
     /// Normals in the reference configuration.
@@ -674,7 +677,8 @@ pub trait WallModel<V: Vector>: Sync {
     const RENORMALISE_DIFFUSION: bool = false;
 
     /// Refreshes `elements.pressure`, the wall pressure used for forces and, where the model
-    /// needs it, in the wall terms. Called before every rate sweep.
+    /// needs it, in the wall terms, of at least the elements in reach
+    /// ([`BoundaryElements::in_reach`]). Called before every rate sweep.
     fn update_wall_pressure(
         &self,
         kernel: &Wendland,

@@ -57,13 +57,16 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         fluid: &FluidState<V>,
         fluid_grid: &CellGrid<V>,
     ) {
-        let centres = &elements.centre;
+        let (centres, in_reach) = (&elements.centre, &elements.in_reach);
         let g = self.gravity;
         elements
             .pressure
             .par_iter_mut()
             .enumerate()
             .for_each(|(k, pk)| {
+                if !in_reach.is_empty() && !in_reach[k] {
+                    return;
+                }
                 let (mut weighted, mut shepard) = (0.0, 0.0);
                 fluid_grid.for_each_neighbour(
                     centres[k],
