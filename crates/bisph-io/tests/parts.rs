@@ -11,6 +11,7 @@ use bisph_core::decomposition::InProcess;
 use bisph_core::dim::Vector;
 use bisph_core::Simulation;
 use bisph_io::case::CaseDim;
+use bisph_io::run::checkpoint::SimState;
 use split_runs::{advance, built, SplitCase, Trace, SPLIT_CASES};
 
 /// What one split run did besides its trace: particles handed between parts and halo
@@ -119,4 +120,49 @@ fn semi_analytical_walls() {
         steps: 20,
         three_d: false,
     });
+}
+
+/// A whole run's state, restored and split into 1 to 4 parts, continues with the bits of the
+/// uninterrupted run: the checkpoint of a whole run resumes on any number of parts.
+fn check_resumed<V: CaseDim>(case: &SplitCase, before: usize) {
+    let mut whole = built::<V>(case.name, case.overrides);
+    advance(&mut whole, before);
+    let mut state = SimState::default();
+    state.capture(&whole);
+    let expected = advance(&mut whole, case.steps);
+    let mut restored = built::<V>(case.name, case.overrides);
+    state.restore(&mut restored).unwrap();
+    assert!(
+        restored.neighbour_list_origin().is_some(),
+        "the whole is resumed with its Verlet list"
+    );
+    for parts in 1..=4 {
+        let (trace, _) = split_run(&restored, parts, case.steps);
+        for (step, (got, want)) in trace.steps.iter().zip(&expected.steps).enumerate() {
+            assert_eq!(got, want, "resumed on {parts} parts, step {}", step + 1);
+        }
+        assert!(
+            trace.particles == expected.particles,
+            "{parts} parts: particles"
+        );
+        assert_eq!(trace.totals, expected.totals, "{parts} parts: totals");
+    }
+}
+
+#[test]
+fn a_breaking_dam_resumed_on_any_number_of_parts() {
+    let case = SplitCase {
+        steps: 400,
+        ..SPLIT_CASES[0]
+    };
+    check_resumed::<glam::DVec2>(&case, 500);
+}
+
+#[test]
+fn a_floating_body_resumed_on_any_number_of_parts() {
+    let case = SplitCase {
+        steps: 30,
+        ..SPLIT_CASES[3]
+    };
+    check_resumed::<glam::DVec2>(&case, 30);
 }

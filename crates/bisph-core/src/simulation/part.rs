@@ -40,7 +40,9 @@ pub(crate) struct Part<V: Vector> {
     /// How far outside its region a part needs the particles, besides the skin of the
     /// neighbour list: two kernel supports and twice the largest element reach (a particle
     /// sums over wall points within a support, and the wall values there are sums over the
-    /// fluid within a support of an element's quadrature points).
+    /// fluid within a support of an element's quadrature points). With a skin of at most a
+    /// support, this also covers a Verlet list taken over from a restored whole, whose
+    /// particles may each be half a skin from where it was built.
     reach: f64,
     /// Particles this part has handed to others since it was built.
     departed: u64,
@@ -120,8 +122,9 @@ impl<V: Vector> Simulation<V> {
     /// The part `transport.rank()` of a run of the simulation `whole` split into
     /// `transport.parts()` parts (see the module documentation). Every part must be built
     /// at once, each on its own thread or process with its end of the transport: building
-    /// exchanges the halos. `whole` must hold the whole fluid and no neighbour list (just
-    /// built, or restored): its next steps and those of its parts then give the same bits.
+    /// exchanges the halos. `whole` holds the whole fluid, just built or restored from a
+    /// checkpoint (then with its Verlet list, which the parts take over): its next steps and
+    /// those of its parts give the same bits.
     ///
     /// # Panics
     /// When `whole` is itself a part.
@@ -155,7 +158,16 @@ impl<V: Vector> Simulation<V> {
             departed: 0,
         });
         part.select_halo();
-        part.rebuild_grid(false);
+        // The Verlet list of the whole, over this part's particles (the halo's included).
+        let origin = whole.neighbour_list_origin().map(|origin| {
+            let mut at_id = vec![V::ZERO; origin.len()];
+            for (&id, &o) in f.id.iter().zip(origin) {
+                at_id[id as usize] = o;
+            }
+            let ids = &part.fluid.id;
+            ids.iter().map(|&id| at_id[id as usize]).collect::<Vec<V>>()
+        });
+        part.restore_neighbour_list(origin.as_deref());
         part
     }
 
