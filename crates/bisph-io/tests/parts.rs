@@ -166,3 +166,42 @@ fn a_floating_body_resumed_on_any_number_of_parts() {
     };
     check_resumed::<glam::DVec2>(&case, 30);
 }
+
+/// A split run's state gathered from its parts ([`SimState::capture_whole`]) restores into a
+/// whole simulation that continues with the bits of the uninterrupted run: a checkpoint of a
+/// split run, resumed in one process.
+#[test]
+fn a_split_run_gathered_continues_whole() {
+    let case = &SPLIT_CASES[0];
+    let (before, after) = (500, 400);
+    let mut whole = built::<glam::DVec2>(case.name, case.overrides);
+    advance(&mut whole, before);
+    let expected = advance(&mut whole, after);
+    let start = built::<glam::DVec2>(case.name, case.overrides);
+    for parts in [2, 3] {
+        let ends = InProcess::connect(parts);
+        let states: Vec<SimState<glam::DVec2>> = std::thread::scope(|scope| {
+            let runs: Vec<_> = ends
+                .into_iter()
+                .map(|end| {
+                    let start = &start;
+                    scope.spawn(move || {
+                        let mut part = Simulation::part_of(start, Box::new(end));
+                        advance(&mut part, before);
+                        let mut state = SimState::default();
+                        state.capture_whole(&part);
+                        state
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        });
+        for state in &states {
+            let mut resumed = built::<glam::DVec2>(case.name, case.overrides);
+            state.restore(&mut resumed).unwrap();
+            assert!(resumed.neighbour_list_origin().is_some(), "with its list");
+            let trace = advance(&mut resumed, after);
+            assert!(trace == expected, "gathered from {parts} parts");
+        }
+    }
+}

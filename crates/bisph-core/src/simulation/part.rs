@@ -171,6 +171,11 @@ impl<V: Vector> Simulation<V> {
         part
     }
 
+    /// `true` for a part of a split run ([`Simulation::part_of`]).
+    pub fn is_part(&self) -> bool {
+        self.part.is_some()
+    }
+
     /// Number of parts of the run (1 for a whole simulation).
     pub fn parts(&self) -> usize {
         self.part.as_ref().map_or(1, |p| p.transport.parts())
@@ -207,22 +212,49 @@ impl<V: Vector> Simulation<V> {
     /// The own particles of every part, in increasing id, with their whole records (a whole
     /// simulation gives its own particles). Every part must call it, and each gets them all.
     pub fn gathered_fluid(&self) -> Fluid<V> {
-        let mut fluid = match &self.part {
-            None => self.fluid.clone(),
+        self.gathered().0
+    }
+
+    /// [`Simulation::gathered_fluid`], and where the Verlet list in use was built for each of
+    /// those particles ([`Simulation::neighbour_list_origin`]), in the same order: the state
+    /// of the whole run, which a whole simulation restores ([`Simulation::restore_neighbour_list`])
+    /// to continue with the same bits, split again or not.
+    pub fn gathered(&self) -> (Fluid<V>, Option<Vec<V>>) {
+        let origin = self.neighbour_list_origin();
+        let (mut fluid, mut built_at) = match &self.part {
+            None => (self.fluid.clone(), origin.map(<[V]>::to_vec)),
             Some(part) => {
+                let owned = 0..part.owned;
                 let mut words = Vec::new();
-                self.fluid.encode(0..part.owned, &mut words);
+                self.fluid.encode(owned.clone(), &mut words);
                 let mut fluid = Fluid::default();
                 for words in all_gather(&part.transport, words) {
                     fluid.append_encoded(&words);
                 }
-                fluid
+                // Every part holds a list, or none does (they are built at the same steps).
+                let built_at = origin.map(|origin| {
+                    let words: Message = origin[owned]
+                        .iter()
+                        .flat_map(|o| (0..V::DIM).map(|k| o.get(k).to_bits()))
+                        .collect();
+                    let gathered = all_gather(&part.transport, words).concat();
+                    gathered
+                        .chunks_exact(V::DIM)
+                        .map(|c| {
+                            V::from_slice(&c.iter().map(|&w| f64::from_bits(w)).collect::<Vec<_>>())
+                        })
+                        .collect::<Vec<V>>()
+                });
+                (fluid, built_at)
             }
         };
         let mut by_id: Vec<u32> = (0..fluid.len() as u32).collect();
         by_id.sort_unstable_by_key(|&i| fluid.id[i as usize]);
         fluid.permute(&by_id, &mut PermuteScratch::default());
-        fluid
+        if let Some(points) = &mut built_at {
+            *points = by_id.iter().map(|&i| points[i as usize]).collect();
+        }
+        (fluid, built_at)
     }
 
     /// Adds `sums` over the parts (nothing to do for a whole simulation).

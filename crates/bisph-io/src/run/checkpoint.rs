@@ -227,6 +227,19 @@ pub fn set_free_body_values(b: &mut FreeBody, v: &[f64; FREE_BODY_VALUES]) {
 }
 
 impl<V: Vector> SimState<V> {
+    /// The state of the whole run `sim` belongs to: [`SimState::capture`] of a whole
+    /// simulation; of a part of a split run, its state with the fluid and the Verlet list's
+    /// build positions gathered from every part (every part must call it). A whole
+    /// simulation restores it and continues with the bits of the run, split again or not.
+    pub fn capture_whole(&mut self, sim: &Simulation<V>) {
+        self.capture(sim);
+        if sim.is_part() {
+            let (fluid, origin) = sim.gathered();
+            self.fluid = fluid;
+            self.neighbour_origin = origin.unwrap_or_default();
+        }
+    }
+
     /// Copies the state of `sim` into `self`, reusing its buffers (no allocation once warm).
     pub fn capture(&mut self, sim: &Simulation<V>) {
         self.time = sim.time;
