@@ -725,10 +725,10 @@ impl<V: Vector> PairList<V> {
         });
     }
 
-    /// Lists the neighbours within `radius` of every point of `points` among `points` from
-    /// `candidates` (built over the same points, none of which has moved more than half its
-    /// skin since), with `factor(|r_ij|)` per pair, in the candidates' order; in parallel over
-    /// blocks (the content does not depend on the number of threads).
+    /// Lists the neighbours within `radius` of every point whose candidates `candidates`
+    /// lists (built over the same points, none of which has moved more than half its skin
+    /// since) among `points`, with `factor(|r_ij|)` per pair, in the candidates' order; in
+    /// parallel over blocks (the content does not depend on the number of threads).
     pub fn rebuild_from_candidates(
         &mut self,
         candidates: &CandidateList<V>,
@@ -736,7 +736,7 @@ impl<V: Vector> PairList<V> {
         radius: f64,
         factor: impl Fn(f64) -> f64 + Sync,
     ) {
-        self.fill(points.len(), factor, |i, visit| {
+        self.fill(candidates.queries(), factor, |i, visit| {
             candidates.for_each_neighbour(i, points[i], points, radius, visit)
         });
     }
@@ -835,6 +835,8 @@ pub struct CandidateList<V> {
     blocks: Vec<CandidateBlock>,
     /// The points at the build.
     origin: Vec<V>,
+    /// Points whose candidates are listed: the first this many.
+    queries: usize,
     period: Periodicity<V>,
 }
 
@@ -853,14 +855,25 @@ impl<V: Vector> CandidateList<V> {
     /// must index `points`), in parallel over blocks (the content does not depend on the
     /// number of threads).
     pub fn rebuild(&mut self, grid: &CellGrid<V>, points: &[V], radius: f64) {
+        self.rebuild_for(grid, points, points.len(), radius);
+    }
+
+    /// [`CandidateList::rebuild`] listing the candidates of the first `queries` points only
+    /// (a part of a split run lists its own particles'); [`CandidateList::holds`] still
+    /// watches every point.
+    ///
+    /// # Panics
+    /// When `queries` exceeds the number of points.
+    pub fn rebuild_for(&mut self, grid: &CellGrid<V>, points: &[V], queries: usize, radius: f64) {
         self.period = *grid.periodicity();
         self.origin.clear();
         self.origin.extend_from_slice(points);
+        self.queries = queries;
         self.blocks
-            .resize_with(points.len().div_ceil(Self::BLOCK), Default::default);
+            .resize_with(queries.div_ceil(Self::BLOCK), Default::default);
         self.blocks
             .par_iter_mut()
-            .zip(points.par_chunks(Self::BLOCK))
+            .zip(points[..queries].par_chunks(Self::BLOCK))
             .for_each(|(block, chunk)| {
                 block.start.clear();
                 block.index.clear();
@@ -904,6 +917,11 @@ impl<V: Vector> CandidateList<V> {
     /// Number of points listed.
     pub fn len(&self) -> usize {
         self.origin.len()
+    }
+
+    /// Number of points whose candidates are listed (the first ones).
+    pub fn queries(&self) -> usize {
+        self.queries
     }
 
     /// `true` when no point is listed.

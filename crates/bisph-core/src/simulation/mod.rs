@@ -682,9 +682,14 @@ impl<V: Vector> Simulation<V> {
         self.rebuild_neighbours(interval > 0);
         let start = Instant::now();
         let radius = self.config.kernel.support + skin;
-        self.scratch
-            .candidates
-            .rebuild(&self.fluid_grid, &self.fluid.position, radius);
+        // A part lists its own particles' candidates: the halo takes the owners' rates.
+        let queries = self.owned_len();
+        self.scratch.candidates.rebuild_for(
+            &self.fluid_grid,
+            &self.fluid.position,
+            queries,
+            radius,
+        );
         self.scratch.candidates_valid = true;
         self.scratch.use_candidates = true;
         self.wall_clearance
@@ -751,9 +756,10 @@ impl<V: Vector> Simulation<V> {
         };
         self.fluid_grid.rebuild_keyed(origin, &self.fluid.id);
         let radius = self.config.kernel.support + skin;
+        let queries = self.owned_len();
         self.scratch
             .candidates
-            .rebuild(&self.fluid_grid, origin, radius);
+            .rebuild_for(&self.fluid_grid, origin, queries, radius);
         self.scratch.candidates_valid = true;
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
