@@ -603,6 +603,7 @@ fn measure<V: CaseDim>(
         "seconds_handover": t.handover, "seconds_exchange_max": exchange_seconds,
         "exchanges_per_step": exchanges, "words_sent_per_step_max": words / steps,
         "halo_particles_max": halo, "particles_handed_over": handed,
+        "rebalances": sim.rebalances(),
         "peak_bytes_per_particle": peak / n * sim.parts() as f64,
         "evaluations_per_step": evaluations as f64 / steps,
     })))

@@ -22,7 +22,7 @@
 use super::Simulation;
 use crate::decomposition::{
     all_gather, all_parts, bisect, max_over_parts, select_halos, sum_over_parts, Bounds, Counted,
-    Decomposition, ExactSum, Message, Traffic, Transport,
+    Decomposition, ExactSum, Message, RebalancePolicy, Traffic, Transport,
 };
 use crate::dim::Vector;
 use crate::error::SimError;
@@ -46,7 +46,13 @@ pub(crate) struct Part<V: Vector> {
     reach: f64,
     /// Particles this part has handed to others since it was built.
     departed: u64,
+    /// Times the regions were cut again since it was built.
+    rebalances: u64,
 }
+
+/// When a split run cuts its regions again: at a neighbour-list rebuild, once the part with
+/// the most particles holds 10% more than the mean.
+const REBALANCE: RebalancePolicy = RebalancePolicy { threshold: 1.1 };
 
 /// The results of neighbour sums copied from the owners to the halos.
 #[derive(Clone, Copy, Debug)]
@@ -156,6 +162,7 @@ impl<V: Vector> Simulation<V> {
             send: Vec::new(),
             reach,
             departed: 0,
+            rebalances: 0,
         });
         part.select_halo();
         // The Verlet list of the whole, over this part's particles (the halo's included).
@@ -201,6 +208,12 @@ impl<V: Vector> Simulation<V> {
     /// simulation).
     pub fn traffic(&self) -> Option<Traffic> {
         self.part.as_ref().map(|p| p.transport.traffic())
+    }
+
+    /// Number of times the regions of a split run were cut again since it was split (0 for a
+    /// whole simulation).
+    pub fn rebalances(&self) -> u64 {
+        self.part.as_ref().map_or(0, |p| p.rebalances)
     }
 
     /// Number of particles this part has handed to other parts since it was built (0 for a
@@ -383,11 +396,46 @@ impl<V: Vector> Simulation<V> {
         debug_assert_eq!(slot, f.len(), "every halo particle refreshed");
     }
 
+    /// Cuts the regions again, by recursive coordinate bisection of every part's own particles
+    /// (unit weights, as at the split), when the particle counts of the parts are further
+    /// apart than [`REBALANCE`] allows. Every part decides and cuts from the same gathered
+    /// data, so all reach the same regions.
+    fn rebalance(&mut self) {
+        let Some(part) = &mut self.part else {
+            return;
+        };
+        let counts: Vec<f64> = all_gather(&part.transport, vec![part.owned as u64])
+            .iter()
+            .map(|m| m[0] as f64)
+            .collect();
+        if !REBALANCE.should_rebalance(&counts) {
+            return;
+        }
+        let f = &self.fluid;
+        let mut words = Vec::new();
+        for i in 0..part.owned {
+            words.push(u64::from(f.id[i]));
+            words.extend((0..V::DIM).map(|k| f.position[i].get(k).to_bits()));
+        }
+        let gathered = all_gather(&part.transport, words).concat();
+        let (mut points, mut ids) = (Vec::new(), Vec::new());
+        for record in gathered.chunks_exact(1 + V::DIM) {
+            ids.push(record[0] as u32);
+            let x: Vec<f64> = record[1..].iter().map(|&w| f64::from_bits(w)).collect();
+            points.push(V::from_slice(&x));
+        }
+        let weights = vec![1.0; points.len()];
+        let domain = *part.decomposition.domain();
+        part.decomposition = bisect(&points, &weights, &ids, part.transport.parts(), domain);
+        part.rebalances += 1;
+    }
+
     /// Moves the particles that left this part's region to their owners, stores the own
     /// particles in the cell grid's order when `sort`, and selects the halo again (the
     /// particles of other parts within the reach and the skin of the region). Nothing to do
     /// for a whole simulation.
     pub(crate) fn repartition(&mut self, sort: bool) {
+        self.rebalance();
         let Some(part) = &self.part else {
             return;
         };
