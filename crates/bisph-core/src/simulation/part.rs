@@ -16,8 +16,9 @@
 //!   (a wall element belongs to the part whose region holds its centre) and added over the
 //!   parts, maxima are taken over the parts, and the decisions that follow (time step,
 //!   neighbour-list rebuilds, midpoint convergence, errors) are the same on every part;
-//! - at each neighbour-list rebuild, particles that left the region move to their new owner
-//!   and the halos are selected again ([`Simulation::repartition`]).
+//! - at each neighbour-list rebuild, the regions are cut again when the parts' particle counts
+//!   have drifted apart, particles that left their region move to its owner, and the halos
+//!   are selected again ([`Simulation::repartition`]).
 
 use super::Simulation;
 use crate::decomposition::{
