@@ -12,7 +12,7 @@
 use super::ExactSum;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Barrier, Mutex};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Instant;
 
 /// The words a part sends to or receives from another.
@@ -151,7 +151,9 @@ impl Transport for Counted {
 }
 
 /// Parts as threads of one process: [`InProcess::connect`] gives one end per part, each to be
-/// driven from its own thread. Used to run and test a decomposed simulation without MPI.
+/// driven from its own thread. Used to run and test a decomposed simulation without MPI. A
+/// part whose thread panics breaks the transport: the others panic at their next exchange
+/// instead of waiting for it forever.
 pub struct InProcess {
     rank: usize,
     shared: Arc<Shared>,
@@ -159,9 +161,19 @@ pub struct InProcess {
 
 struct Shared {
     parts: usize,
+    state: Mutex<Rendezvous>,
+    arrived: Condvar,
+}
+
+/// The messages in flight and the count of parts at the current meeting point.
+struct Rendezvous {
     /// `slots[to][from]`: the message in flight from `from` to `to`.
-    slots: Mutex<Vec<Vec<Message>>>,
-    barrier: Barrier,
+    slots: Vec<Vec<Message>>,
+    waiting: usize,
+    /// Meeting points passed so far.
+    generation: u64,
+    /// A part's thread panicked.
+    broken: bool,
 }
 
 impl InProcess {
@@ -173,8 +185,13 @@ impl InProcess {
         assert!(parts >= 1, "a transport needs at least one part");
         let shared = Arc::new(Shared {
             parts,
-            slots: Mutex::new(vec![vec![Vec::new(); parts]; parts]),
-            barrier: Barrier::new(parts),
+            state: Mutex::new(Rendezvous {
+                slots: vec![vec![Vec::new(); parts]; parts],
+                waiting: 0,
+                generation: 0,
+                broken: false,
+            }),
+            arrived: Condvar::new(),
         });
         (0..parts)
             .map(|rank| InProcess {
@@ -182,6 +199,40 @@ impl InProcess {
                 shared: Arc::clone(&shared),
             })
             .collect()
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Rendezvous> {
+        self.shared.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Waits until every part has called it as often as this one.
+    fn meet<'a>(&'a self, mut state: MutexGuard<'a, Rendezvous>) -> MutexGuard<'a, Rendezvous> {
+        let generation = state.generation;
+        state.waiting += 1;
+        if state.waiting == self.shared.parts {
+            state.waiting = 0;
+            state.generation += 1;
+            self.shared.arrived.notify_all();
+            return state;
+        }
+        while state.generation == generation {
+            assert!(!state.broken, "another part of the run stopped");
+            state = self
+                .shared
+                .arrived
+                .wait(state)
+                .unwrap_or_else(|e| e.into_inner());
+        }
+        state
+    }
+}
+
+impl Drop for InProcess {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.lock().broken = true;
+            self.shared.arrived.notify_all();
+        }
     }
 }
 
@@ -202,19 +253,16 @@ impl Transport for InProcess {
 
     fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message> {
         assert_eq!(outgoing.len(), self.parts(), "one message per part");
-        let lock = || self.shared.slots.lock().unwrap_or_else(|e| e.into_inner());
-        {
-            let mut slots = lock();
-            for (to, message) in outgoing.into_iter().enumerate() {
-                slots[to][self.rank] = message;
-            }
+        let mut state = self.lock();
+        for (to, message) in outgoing.into_iter().enumerate() {
+            state.slots[to][self.rank] = message;
         }
-        // Every message is in place once all parts pass; each then takes its own row, and
+        // Every message is in place once all parts meet; each then takes its own row, and
         // nobody writes the next round's messages before all have taken theirs.
-        self.shared.barrier.wait();
+        let mut state = self.meet(state);
         let empty = vec![Vec::new(); self.parts()];
-        let incoming = std::mem::replace(&mut lock()[self.rank], empty);
-        self.shared.barrier.wait();
+        let incoming = std::mem::replace(&mut state.slots[self.rank], empty);
+        drop(self.meet(state));
         incoming
     }
 }
@@ -229,6 +277,27 @@ mod tests {
             let handles: Vec<_> = ends.iter().map(|end| scope.spawn(|| work(end))).collect();
             handles.into_iter().map(|h| h.join().unwrap()).collect()
         })
+    }
+
+    /// A part that panics makes the others panic at their next exchange, not wait forever.
+    #[test]
+    fn a_panicking_part_breaks_the_transport() {
+        let ends = InProcess::connect(2);
+        let outcomes: Vec<bool> = std::thread::scope(|scope| {
+            let handles: Vec<_> = ends
+                .into_iter()
+                .map(|end| {
+                    scope.spawn(move || {
+                        if end.rank() == 1 {
+                            panic!("a part stops");
+                        }
+                        end.exchange(vec![Vec::new(); 2]);
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().is_err()).collect()
+        });
+        assert_eq!(outcomes, [true, true]);
     }
 
     #[test]

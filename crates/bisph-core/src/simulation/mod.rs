@@ -31,7 +31,7 @@ use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::Shepard;
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
-use part::{BadParticle, HaloFields, Part};
+use part::{BadParticle, Fault, HaloFields, Part};
 use rayon::prelude::*;
 use std::time::Instant;
 use wall_models::{WallModelInputs, WallModelTask};
@@ -1065,18 +1065,18 @@ impl<V: Vector> Simulation<V> {
         let (lo, hi) = (self.config.domain_min, self.config.domain_max);
         let bad = |i: usize| {
             let r = f.position[i];
-            let quantity = if !r.is_finite() {
-                0
+            let fault = if !r.is_finite() {
+                Fault::Position
             } else if !f.velocity[i].is_finite() {
-                1
+                Fault::Velocity
             } else if !(f.density[i].is_finite() && f.density[i] > 0.0) {
-                2
+                Fault::Density
             } else if (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k))) {
-                3
+                Fault::Outside
             } else {
                 return None;
             };
-            Some(BadParticle::new(f.id[i], quantity, r.to_xyz()))
+            Some(BadParticle::new(f.id[i], fault, r.to_xyz()))
         };
         // Blocks scanned in parallel for any bad particle; all are then looked at in turn
         // (only when the run stops).

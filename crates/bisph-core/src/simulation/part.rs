@@ -68,17 +68,37 @@ pub(crate) enum HaloFields {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct BadParticle {
     id: u32,
-    /// 0: position not finite, 1: velocity not finite, 2: density not finite and positive,
-    /// 3: outside the domain.
-    quantity: u8,
+    fault: Fault,
     position: [f64; 3],
 }
 
+/// What is wrong with a [`BadParticle`], in the order the checks look.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Fault {
+    /// The position is not finite.
+    Position,
+    /// The velocity is not finite.
+    Velocity,
+    /// The density is not finite and positive.
+    Density,
+    /// The particle left the domain.
+    Outside,
+}
+
+impl Fault {
+    const ALL: [Fault; 4] = [
+        Fault::Position,
+        Fault::Velocity,
+        Fault::Density,
+        Fault::Outside,
+    ];
+}
+
 impl BadParticle {
-    pub(crate) fn new(id: u32, quantity: u8, position: [f64; 3]) -> Self {
+    pub(crate) fn new(id: u32, fault: Fault, position: [f64; 3]) -> Self {
         BadParticle {
             id,
-            quantity,
+            fault,
             position,
         }
     }
@@ -88,7 +108,7 @@ impl BadParticle {
     }
 
     fn to_words(self) -> Message {
-        let mut words = vec![u64::from(self.id), u64::from(self.quantity)];
+        let mut words = vec![u64::from(self.id), self.fault as u64];
         words.extend(self.position.map(f64::to_bits));
         words
     }
@@ -96,18 +116,18 @@ impl BadParticle {
     fn from_words(words: &[u64]) -> Self {
         BadParticle {
             id: words[0] as u32,
-            quantity: words[1] as u8,
+            fault: Fault::ALL[words[1] as usize],
             position: [2, 3, 4].map(|k| f64::from_bits(words[k])),
         }
     }
 
     /// The error naming this particle.
     pub(crate) fn error(self, step: u64, time: f64) -> SimError {
-        let quantity = match self.quantity {
-            0 => "position",
-            1 => "velocity",
-            2 => "density",
-            _ => {
+        let quantity = match self.fault {
+            Fault::Position => "position",
+            Fault::Velocity => "velocity",
+            Fault::Density => "density",
+            Fault::Outside => {
                 return SimError::LeftDomain {
                     particle: self.id,
                     position: self.position,
