@@ -81,14 +81,27 @@ pub fn fluid_energy_sums<V: Vector>(
 /// (a split run: [`crate::Simulation::energy_scale`]).
 pub fn energy_scale<V: Vector>(fluid: &Fluid<V>, eos: &Eos, gravity: V) -> f64 {
     let (kinetic, compressible, _) = fluid_energies(fluid, eos, gravity);
-    let heights: Vec<f64> = fluid.position.iter().map(|&r| -gravity.dot(r)).collect();
-    let lowest = heights.iter().copied().fold(f64::INFINITY, f64::min);
-    let available: f64 = if heights.is_empty() {
-        0.0
-    } else {
-        deterministic_sum(fluid.len(), |i| fluid.mass[i] * (heights[i] - lowest))
-    };
+    let n = fluid.len();
+    let lowest = lowest_height(fluid, n, gravity);
+    let available = potential_above(fluid, n, gravity, lowest).value();
     kinetic + compressible.abs() + available
+}
+
+/// The height `-g . r / |g|`, times `|g|`, of the lowest of the first `n` particles
+/// (infinite when there are none).
+pub fn lowest_height<V: Vector>(fluid: &Fluid<V>, n: usize, gravity: V) -> f64 {
+    fluid.position[..n]
+        .iter()
+        .map(|&r| -gravity.dot(r))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The potential energy of the first `n` particles above the height `lowest`
+/// ([`lowest_height`]), `sum m |g| (z_i - z_min)`, summed exactly.
+pub fn potential_above<V: Vector>(fluid: &Fluid<V>, n: usize, gravity: V, lowest: f64) -> ExactSum {
+    exact_partial_sum(n, |i| {
+        fluid.mass[i] * (-gravity.dot(fluid.position[i]) - lowest)
+    })
 }
 
 #[cfg(test)]

@@ -52,23 +52,10 @@ pub struct FluxHistory {
 }
 
 impl<V: Vector> FluxControl<V> {
-    /// Bulk velocity `v~ = Q_SPH / A` over the slice (eqs 56-57); distances to the slice are
-    /// taken across the period where the flow direction is periodic.
-    pub fn bulk_velocity(
-        &self,
-        position: &[V],
-        velocity: &[V],
-        mass: &[f64],
-        density: &[f64],
-        periodicity: &Periodicity<V>,
-    ) -> f64 {
-        let flux = self.flux_sum(position, velocity, mass, density, periodicity);
-        self.bulk_velocity_of(flux.value())
-    }
-
     /// The volume flux through the slice, `sum V_i u_i . e` over the particles in it (of
     /// `position`, the others' arrays at least as long), summed exactly: the sums over parts
-    /// of the fluid add up to the whole's.
+    /// of the fluid add up to the whole's. Distances to the slice are taken across the period
+    /// where the flow direction is periodic.
     pub fn flux_sum(
         &self,
         position: &[V],
@@ -90,7 +77,8 @@ impl<V: Vector> FluxControl<V> {
         })
     }
 
-    /// The bulk velocity of the volume flux `flux` through the slice ([`FluxControl::flux_sum`]).
+    /// Bulk velocity `v~ = Q_SPH / A` (eqs 56-57) of the volume flux `flux` through the slice
+    /// ([`FluxControl::flux_sum`]).
     pub fn bulk_velocity_of(&self, flux: f64) -> f64 {
         flux / self.slice_width / self.area
     }
@@ -164,7 +152,8 @@ mod tests {
             DVec2::new(0.5, 0.0),
         ];
         let vel = [DVec2::new(2.0, 0.0); 3];
-        let v = c.bulk_velocity(&pos, &vel, &[0.1; 3], &[1.0; 3], &period);
+        let flux = c.flux_sum(&pos, &vel, &[0.1; 3], &[1.0; 3], &period);
+        let v = c.bulk_velocity_of(flux.value());
         assert!((v - 2.0 * 0.1 * 2.0 / 0.2 / 2.0).abs() < 1e-14);
     }
 }

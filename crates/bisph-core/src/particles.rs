@@ -1,5 +1,6 @@
 //! Fluid particles as a struct of arrays.
 
+use crate::decomposition::{push_vector, read_scalar, read_vector};
 use crate::dim::Vector;
 use rayon::prelude::*;
 
@@ -117,16 +118,17 @@ impl<V: Vector> Fluid<V> {
     /// ([`Fluid::RECORD_WORDS`] words each, read back by [`Fluid::append_encoded`]). The
     /// arrays of the step before must be held ([`Fluid::hold_earlier_rates`]).
     pub fn encode(&self, indices: impl IntoIterator<Item = usize>, out: &mut Vec<u64>) {
-        let vector = |out: &mut Vec<u64>, v: V| {
-            out.extend((0..V::DIM).map(|k| v.get(k).to_bits()));
-        };
         for i in indices {
             out.push(u64::from(self.id[i]));
-            vector(out, self.position[i]);
-            vector(out, self.velocity[i]);
-            vector(out, self.acceleration[i]);
-            vector(out, self.earlier_acceleration[i]);
-            vector(out, self.grad_gamma[i]);
+            for v in [
+                self.position[i],
+                self.velocity[i],
+                self.acceleration[i],
+                self.earlier_acceleration[i],
+                self.grad_gamma[i],
+            ] {
+                push_vector(out, v);
+            }
             out.extend(
                 [
                     self.density[i],
@@ -153,32 +155,20 @@ impl<V: Vector> Fluid<V> {
             "whole particle records"
         );
         for record in words.chunks_exact(Self::RECORD_WORDS) {
-            let mut next = record.iter().copied();
-            let mut scalar = || f64::from_bits(next.next().unwrap_or_default());
-            let id = record[0] as u32;
-            scalar();
-            let mut vector = || {
-                let mut v = V::ZERO;
-                for k in 0..V::DIM {
-                    v.set(k, scalar());
-                }
-                v
-            };
-            let (position, velocity, acceleration) = (vector(), vector(), vector());
-            let (earlier_acceleration, grad_gamma) = (vector(), vector());
-            self.id.push(id);
-            self.position.push(position);
-            self.velocity.push(velocity);
-            self.acceleration.push(acceleration);
-            self.earlier_acceleration.push(earlier_acceleration);
-            self.grad_gamma.push(grad_gamma);
-            self.density.push(scalar());
-            self.mass.push(scalar());
-            self.pressure.push(scalar());
-            self.density_rate.push(scalar());
-            self.earlier_density_rate.push(scalar());
-            self.gamma.push(scalar());
-            self.density_offset.push(scalar());
+            let mut next = record[1..].iter().copied();
+            self.id.push(record[0] as u32);
+            self.position.push(read_vector(&mut next));
+            self.velocity.push(read_vector(&mut next));
+            self.acceleration.push(read_vector(&mut next));
+            self.earlier_acceleration.push(read_vector(&mut next));
+            self.grad_gamma.push(read_vector(&mut next));
+            self.density.push(read_scalar(&mut next));
+            self.mass.push(read_scalar(&mut next));
+            self.pressure.push(read_scalar(&mut next));
+            self.density_rate.push(read_scalar(&mut next));
+            self.earlier_density_rate.push(read_scalar(&mut next));
+            self.gamma.push(read_scalar(&mut next));
+            self.density_offset.push(read_scalar(&mut next));
         }
     }
 }

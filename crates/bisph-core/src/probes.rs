@@ -34,12 +34,6 @@ pub struct Probe<V> {
 }
 
 impl<V: Vector> Probe<V> {
-    /// The probe's value for the current fluid state.
-    pub fn sample(&self, kernel: &Wendland, fluid: &Fluid<V>, grid: &CellGrid<V>) -> f64 {
-        self.sample_sum(kernel, fluid, fluid.len(), grid, |_| true)
-            .value()
-    }
-
     /// The probe's value as an exact sum over parts of the fluid: the first `owned` particles
     /// of `fluid` are this part's, and `owns(x)` tells whether this part samples at the point
     /// `x`. A point value (pressures) is added by the part that owns the probe's position, from

@@ -23,21 +23,31 @@ struct Traffic {
     rebalances: u64,
 }
 
-/// The trace of `whole` split into `parts` parts, each on its own thread.
-fn split_run<V: Vector>(whole: &Simulation<V>, parts: usize, steps: usize) -> (Trace, Traffic) {
+/// `work` on each part of `whole` split into `parts` parts, each on its own thread; the
+/// results by part.
+fn on_parts<V: Vector, T: Send>(
+    whole: &Simulation<V>,
+    parts: usize,
+    work: impl Fn(&mut Simulation<V>) -> T + Sync,
+) -> Vec<T> {
     let ends = InProcess::connect(parts);
-    let runs: Vec<(Trace, u64, usize, u64)> = std::thread::scope(|scope| {
+    std::thread::scope(|scope| {
         let runs: Vec<_> = ends
             .into_iter()
             .map(|end| {
-                scope.spawn(move || {
-                    let mut part = Simulation::part_of(whole, Box::new(end));
-                    let trace = advance(&mut part, steps);
-                    (trace, part.departed(), part.halo_len(), part.rebalances())
-                })
+                let work = &work;
+                scope.spawn(move || work(&mut Simulation::part_of(whole, Box::new(end))))
             })
             .collect();
         runs.into_iter().map(|r| r.join().unwrap()).collect()
+    })
+}
+
+/// The trace of `whole` split into `parts` parts, each on its own thread.
+fn split_run<V: Vector>(whole: &Simulation<V>, parts: usize, steps: usize) -> (Trace, Traffic) {
+    let runs = on_parts(whole, parts, |part| {
+        let trace = advance(part, steps);
+        (trace, part.departed(), part.halo_len(), part.rebalances())
     });
     let traffic = Traffic {
         departed: runs.iter().map(|r| r.1).sum(),
@@ -56,6 +66,19 @@ fn split_run<V: Vector>(whole: &Simulation<V>, parts: usize, steps: usize) -> (T
     (first, traffic)
 }
 
+/// Asserts that `trace` has the bits of `expected`, step by step, then at the end.
+fn assert_same(trace: &Trace, expected: &Trace, run: &str) {
+    for (step, (got, want)) in trace.steps.iter().zip(&expected.steps).enumerate() {
+        assert_eq!(got, want, "{run}, step {}", step + 1);
+    }
+    assert_eq!(trace.particles.len(), expected.particles.len(), "{run}");
+    assert!(
+        trace.particles == expected.particles,
+        "{run}: the final particle states differ"
+    );
+    assert_eq!(trace.totals, expected.totals, "{run}: totals");
+}
+
 /// Checks that the case split into 1 to 4 parts runs with the bits of the whole; returns the
 /// particles handed between parts and the times the regions were cut again, for each split
 /// run.
@@ -68,15 +91,7 @@ fn check<V: CaseDim>(case: &SplitCase) -> Vec<(u64, u64)> {
         let (trace, traffic) = split_run(&start, parts, case.steps);
         departed.push((traffic.departed, traffic.rebalances));
         assert_eq!(traffic.halo > 0, parts > 1, "{parts} parts: halos");
-        assert_eq!(trace.particles.len(), expected.particles.len());
-        for (step, (got, want)) in trace.steps.iter().zip(&expected.steps).enumerate() {
-            assert_eq!(got, want, "{parts} parts, step {}", step + 1);
-        }
-        assert!(
-            trace.particles == expected.particles,
-            "{parts} parts: the final particle states differ"
-        );
-        assert_eq!(trace.totals, expected.totals, "{parts} parts: totals");
+        assert_same(&trace, &expected, &format!("{parts} parts"));
     }
     departed
 }
@@ -145,14 +160,7 @@ fn check_resumed<V: CaseDim>(case: &SplitCase, before: usize) {
     );
     for parts in 1..=4 {
         let (trace, _) = split_run(&restored, parts, case.steps);
-        for (step, (got, want)) in trace.steps.iter().zip(&expected.steps).enumerate() {
-            assert_eq!(got, want, "resumed on {parts} parts, step {}", step + 1);
-        }
-        assert!(
-            trace.particles == expected.particles,
-            "{parts} parts: particles"
-        );
-        assert_eq!(trace.totals, expected.totals, "{parts} parts: totals");
+        assert_same(&trace, &expected, &format!("resumed on {parts} parts"));
     }
 }
 
@@ -186,22 +194,11 @@ fn a_split_run_gathered_continues_whole() {
     let expected = advance(&mut whole, after);
     let start = built::<glam::DVec2>(case.name, case.overrides);
     for parts in [2, 3] {
-        let ends = InProcess::connect(parts);
-        let states: Vec<SimState<glam::DVec2>> = std::thread::scope(|scope| {
-            let runs: Vec<_> = ends
-                .into_iter()
-                .map(|end| {
-                    let start = &start;
-                    scope.spawn(move || {
-                        let mut part = Simulation::part_of(start, Box::new(end));
-                        advance(&mut part, before);
-                        let mut state = SimState::default();
-                        state.capture_whole(&part);
-                        state
-                    })
-                })
-                .collect();
-            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        let states = on_parts(&start, parts, |part| {
+            advance(part, before);
+            let mut state = SimState::default();
+            state.capture_whole(part);
+            state
         });
         for state in &states {
             let mut resumed = built::<glam::DVec2>(case.name, case.overrides);

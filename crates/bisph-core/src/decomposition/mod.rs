@@ -40,8 +40,8 @@ pub use migration::{plan_migration, Departures, MigrationPlan};
 #[cfg(feature = "mpi")]
 pub use mpi::MpiTransport;
 pub use transport::{
-    all_gather, all_parts, max_over_parts, sum_over_parts, Counted, InProcess, Message, Traffic,
-    Transport,
+    all_gather, all_parts, max_over_parts, push_vector, read_scalar, read_vector, sum_over_parts,
+    Counted, InProcess, Message, Traffic, Transport,
 };
 
 /// Global particle identity, as stored in [`crate::Fluid::id`]: unique over the whole run,

@@ -10,6 +10,7 @@
 //! only once every part has made it.
 
 use super::ExactSum;
+use crate::dim::Vector;
 use std::fmt;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -29,6 +30,25 @@ pub trait Transport: Send + Sync + fmt::Debug {
     /// Sends `outgoing[q]` to part `q` (one message per part, this part's own included) and
     /// returns the messages every part sent to this one, indexed by sender.
     fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message>;
+}
+
+/// Appends the components of `v` to `out`, bit for bit.
+pub fn push_vector<V: Vector>(out: &mut Message, v: V) {
+    out.extend((0..V::DIM).map(|k| v.get(k).to_bits()));
+}
+
+/// The next value [`push_vector`] or `f64::to_bits` wrote in `words` (NaN past the end).
+pub fn read_scalar(words: &mut impl Iterator<Item = u64>) -> f64 {
+    words.next().map_or(f64::NAN, f64::from_bits)
+}
+
+/// The next vector [`push_vector`] wrote in `words`.
+pub fn read_vector<V: Vector>(words: &mut impl Iterator<Item = u64>) -> V {
+    let mut v = V::ZERO;
+    for k in 0..V::DIM {
+        v.set(k, read_scalar(words));
+    }
+    v
 }
 
 /// Every part's `message`, indexed by part.

@@ -4,6 +4,7 @@
 
 mod midpoint;
 mod part;
+mod part_state;
 mod settings;
 mod settle;
 mod verlet;
@@ -14,7 +15,7 @@ pub use wall_models::{UsawParams, WallModelChoice};
 
 use crate::decomposition::ExactSum;
 use crate::dim::Vector;
-use crate::energy::{fluid_energy_sums, EnergyBudget};
+use crate::energy::{fluid_energy_sums, lowest_height, potential_above, EnergyBudget};
 use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
@@ -31,7 +32,7 @@ use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::Shepard;
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
-use part::{BadParticle, Fault, HaloFields, Part};
+use part_state::{BadParticle, Fault, HaloFields, Part};
 use rayon::prelude::*;
 use std::time::Instant;
 use wall_models::{WallModelInputs, WallModelTask};
@@ -1123,19 +1124,12 @@ impl<V: Vector> Simulation<V> {
     /// potential energy above the lowest particle, `sum m |g| (z_i - z_min)`, over every
     /// part.
     pub fn energy_scale(&self) -> f64 {
-        let (f, gravity) = (&self.fluid, self.config.gravity);
+        let (f, gravity, n) = (&self.fluid, self.config.gravity, self.owned_len());
         let e = self.energy();
-        let height = |i: usize| -gravity.dot(f.position[i]);
-        let lowest = (0..self.owned_len())
-            .map(height)
-            .fold(f64::INFINITY, f64::min);
-        let lowest = -self.max_over_parts(-lowest);
-        let available = if lowest.is_finite() {
-            self.sum_owned(|i| f.mass[i] * (height(i) - lowest))
-        } else {
-            0.0
-        };
-        e.kinetic + e.compressible.abs() + available
+        let lowest = -self.max_over_parts(-lowest_height(f, n, gravity));
+        let mut available = [potential_above(f, n, gravity, lowest)];
+        self.sum_over_parts(&mut available);
+        e.kinetic + e.compressible.abs() + available[0].value()
     }
 
     /// Total fluid mass, over every part.

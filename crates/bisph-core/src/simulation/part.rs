@@ -20,130 +20,14 @@
 //!   have drifted apart, particles that left their region move to its owner, and the halos
 //!   are selected again ([`Simulation::repartition`]).
 
+use super::part_state::{halo_words, set_halo, BadParticle, HaloFields, Part, REBALANCE};
 use super::Simulation;
 use crate::decomposition::{
-    all_gather, all_parts, bisect, max_over_parts, select_halos, sum_over_parts, Bounds, Counted,
-    Decomposition, ExactSum, Message, RebalancePolicy, Traffic, Transport,
+    all_gather, all_parts, bisect, max_over_parts, push_vector, read_vector, select_halos,
+    sum_over_parts, Bounds, Counted, ExactSum, Message, Traffic, Transport,
 };
 use crate::dim::Vector;
-use crate::error::SimError;
 use crate::particles::{Fluid, PermuteScratch};
-
-/// What makes a simulation one part of a decomposed run.
-#[derive(Debug)]
-pub(crate) struct Part<V: Vector> {
-    transport: Counted,
-    decomposition: Decomposition<V>,
-    /// Particles `0..owned` are this part's own; the rest are its halo.
-    owned: usize,
-    /// For each part, the own particles it holds in its halo, in the order it stores them.
-    send: Vec<Vec<u32>>,
-    /// How far outside its region a part needs the particles, besides the skin of the
-    /// neighbour list: two kernel supports and twice the largest element reach (a particle
-    /// sums over wall points within a support, and the wall values there are sums over the
-    /// fluid within a support of an element's quadrature points). With a skin of at most a
-    /// support, this also covers a Verlet list taken over from a restored whole, whose
-    /// particles may each be half a skin from where it was built.
-    reach: f64,
-    /// Particles this part has handed to others since it was built.
-    departed: u64,
-    /// Times the regions were cut again since it was built.
-    rebalances: u64,
-}
-
-/// When a split run cuts its regions again: at a neighbour-list rebuild, once the part with
-/// the most particles holds 10% more than the mean.
-const REBALANCE: RebalancePolicy = RebalancePolicy { threshold: 1.1 };
-
-/// The results of neighbour sums copied from the owners to the halos.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum HaloFields {
-    /// Accelerations and density rates.
-    Rates,
-    /// Densities (by summation).
-    Density,
-}
-
-/// A particle whose state stops the run ([`Simulation::check_state`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct BadParticle {
-    id: u32,
-    fault: Fault,
-    position: [f64; 3],
-}
-
-/// What is wrong with a [`BadParticle`], in the order the checks look.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Fault {
-    /// The position is not finite.
-    Position,
-    /// The velocity is not finite.
-    Velocity,
-    /// The density is not finite and positive.
-    Density,
-    /// The particle left the domain.
-    Outside,
-}
-
-impl Fault {
-    const ALL: [Fault; 4] = [
-        Fault::Position,
-        Fault::Velocity,
-        Fault::Density,
-        Fault::Outside,
-    ];
-}
-
-impl BadParticle {
-    pub(crate) fn new(id: u32, fault: Fault, position: [f64; 3]) -> Self {
-        BadParticle {
-            id,
-            fault,
-            position,
-        }
-    }
-
-    pub(crate) fn id(&self) -> u32 {
-        self.id
-    }
-
-    fn to_words(self) -> Message {
-        let mut words = vec![u64::from(self.id), self.fault as u64];
-        words.extend(self.position.map(f64::to_bits));
-        words
-    }
-
-    fn from_words(words: &[u64]) -> Self {
-        BadParticle {
-            id: words[0] as u32,
-            fault: Fault::ALL[words[1] as usize],
-            position: [2, 3, 4].map(|k| f64::from_bits(words[k])),
-        }
-    }
-
-    /// The error naming this particle.
-    pub(crate) fn error(self, step: u64, time: f64) -> SimError {
-        let quantity = match self.fault {
-            Fault::Position => "position",
-            Fault::Velocity => "velocity",
-            Fault::Density => "density",
-            Fault::Outside => {
-                return SimError::LeftDomain {
-                    particle: self.id,
-                    position: self.position,
-                    step,
-                    time,
-                }
-            }
-        };
-        SimError::NonFinite {
-            particle: self.id,
-            quantity,
-            step,
-            time,
-        }
-    }
-}
 
 impl<V: Vector> Simulation<V> {
     /// The part `transport.rank()` of a run of the simulation `whole` split into
@@ -267,16 +151,14 @@ impl<V: Vector> Simulation<V> {
                 }
                 // Every part holds a list, or none does (they are built at the same steps).
                 let built_at = origin.map(|origin| {
-                    let words: Message = origin[owned]
-                        .iter()
-                        .flat_map(|o| (0..V::DIM).map(|k| o.get(k).to_bits()))
-                        .collect();
+                    let mut words = Vec::new();
+                    for &o in &origin[owned] {
+                        push_vector(&mut words, o);
+                    }
                     let gathered = all_gather(&part.transport, words).concat();
-                    gathered
-                        .chunks_exact(V::DIM)
-                        .map(|c| {
-                            V::from_slice(&c.iter().map(|&w| f64::from_bits(w)).collect::<Vec<_>>())
-                        })
+                    let mut next = gathered.into_iter();
+                    (0..fluid.len())
+                        .map(|_| read_vector(&mut next))
                         .collect::<Vec<V>>()
                 });
                 (fluid, built_at)
@@ -384,7 +266,7 @@ impl<V: Vector> Simulation<V> {
             .iter()
             .filter(|m| !m.is_empty())
             .map(|m| BadParticle::from_words(m))
-            .min_by_key(|b| b.id)
+            .min_by_key(|b| b.id())
     }
 
     /// Copies `fields` of every halo particle from its owner (nothing to do for a whole
@@ -408,7 +290,7 @@ impl<V: Vector> Simulation<V> {
         let incoming = part.transport.exchange(outgoing);
         let mut slot = part.owned;
         for words in &incoming {
-            let mut next = words.iter().map(|&w| f64::from_bits(w));
+            let mut next = words.iter().copied();
             while next.len() > 0 {
                 set_halo(f, slot, fields, &mut next);
                 slot += 1;
@@ -436,14 +318,13 @@ impl<V: Vector> Simulation<V> {
         let mut words = Vec::new();
         for i in 0..part.owned {
             words.push(u64::from(f.id[i]));
-            words.extend((0..V::DIM).map(|k| f.position[i].get(k).to_bits()));
+            push_vector(&mut words, f.position[i]);
         }
         let gathered = all_gather(&part.transport, words).concat();
         let (mut points, mut ids) = (Vec::new(), Vec::new());
         for record in gathered.chunks_exact(1 + V::DIM) {
             ids.push(record[0] as u32);
-            let x: Vec<f64> = record[1..].iter().map(|&w| f64::from_bits(w)).collect();
-            points.push(V::from_slice(&x));
+            points.push(read_vector(&mut record[1..].iter().copied()));
         }
         let weights = vec![1.0; points.len()];
         let domain = *part.decomposition.domain();
@@ -536,36 +417,5 @@ impl<V: Vector> Simulation<V> {
         for words in part.transport.exchange(outgoing) {
             f.append_encoded(&words);
         }
-    }
-}
-
-/// Appends the `fields` of particle `i` to `out`.
-fn halo_words<V: Vector>(f: &Fluid<V>, i: usize, fields: HaloFields, out: &mut Message) {
-    match fields {
-        HaloFields::Rates => {
-            let a = f.acceleration[i];
-            out.extend((0..V::DIM).map(|k| a.get(k).to_bits()));
-            out.push(f.density_rate[i].to_bits());
-        }
-        HaloFields::Density => out.push(f.density[i].to_bits()),
-    }
-}
-
-/// Sets the `fields` of particle `i` from the values `next` (written by [`halo_words`]).
-fn set_halo<V: Vector>(
-    f: &mut Fluid<V>,
-    i: usize,
-    fields: HaloFields,
-    next: &mut impl Iterator<Item = f64>,
-) {
-    let mut value = || next.next().unwrap_or(f64::NAN);
-    match fields {
-        HaloFields::Rates => {
-            for k in 0..V::DIM {
-                f.acceleration[i].set(k, value());
-            }
-            f.density_rate[i] = value();
-        }
-        HaloFields::Density => f.density[i] = value(),
     }
 }

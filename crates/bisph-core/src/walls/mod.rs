@@ -623,12 +623,7 @@ impl<V: Vector> Walls<V> {
     }
 
     /// Power the fluid gives to the walls, `sum_j F_j . U_j` with `F_j = P_j n_j s_j`, summed
-    /// exactly ([`Walls::power_sum`]).
-    pub fn power(&self) -> f64 {
-        self.power_sum(|_| true).value()
-    }
-
-    /// The exact sum of the power of [`Walls::power`] over the elements `j` with `counted(j)`.
+    /// exactly over the elements `j` with `counted(j)`.
     pub fn power_sum(&self, counted: impl Fn(usize) -> bool) -> ExactSum {
         let e = &self.elements;
         let mut sum = ExactSum::new();
