@@ -14,4 +14,6 @@ pub mod formats;
 pub mod run;
 
 pub use case::{load_case, parse_case, Case, CaseError, LoadedCase};
-pub use run::{resume_case, run_case, run_case_with, Progress, RunError, RunOptions, Summary};
+pub use run::{
+    resume_case, run_case, run_case_split, run_case_with, Progress, RunError, RunOptions, Summary,
+};

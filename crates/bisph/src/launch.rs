@@ -1,6 +1,6 @@
 //! Starts by a parallel launcher (`mpirun -np K`, `srun` with several tasks, ...): one process
-//! per rank. `bisph bench --single` splits its case over the ranks (with the `mpi` feature);
-//! every other command runs in one process and refuses such a start.
+//! per rank. `bisph run` and `bisph bench --single` split their case over the ranks (with the
+//! `mpi` feature); every other command runs in one process and refuses such a start.
 
 use bisph_core::decomposition::Transport;
 

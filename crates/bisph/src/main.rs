@@ -5,7 +5,7 @@ mod estimates;
 mod launch;
 mod progress;
 
-use bisph_io::{load_case, resume_case, run_case_with, RunError, RunOptions};
+use bisph_io::{load_case, resume_case, run_case_split, RunError, RunOptions};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
 use signal_hook::consts::{SIGINT, SIGTERM};
@@ -129,14 +129,15 @@ const EXIT_INTERRUPTED: u8 = 10;
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        // One configuration splits over the ranks of a parallel launch.
+        // A run, or one bench configuration, splits over the ranks of a parallel launch.
         Some(Command::Bench(args)) if args.is_single() => bench::bench(args),
+        None => run(RunArgs {
+            progress_interval: progress::DEFAULT_INTERVAL,
+            ..RunArgs::default()
+        }),
+        Some(Command::Run(args)) => run(args),
         command => launch::one_process().and_then(|()| match command {
-            None => run(RunArgs {
-                progress_interval: progress::DEFAULT_INTERVAL,
-                ..RunArgs::default()
-            }),
-            Some(Command::Run(args)) => run(args),
+            None | Some(Command::Run(_)) => unreachable!("runs are split above"),
             Some(Command::Bench(args)) => bench::bench(args),
             Some(Command::Validate(args)) => validate(args),
             Some(Command::Shepard(args)) => shepard(args),
@@ -151,6 +152,8 @@ fn main() -> ExitCode {
             eprintln!("{message}");
             ExitCode::from(EXIT_INTERRUPTED)
         }
+        // A rank of a split run other than the first: the first reports.
+        Err((code, message)) if message.is_empty() => ExitCode::from(code),
         Err((code, message)) => {
             eprintln!("error: {message}");
             ExitCode::from(code)
@@ -222,10 +225,18 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
         stop: Some(&stop),
         resume: args.resume.is_some(),
     };
-    let mut shown = progress::RunProgress::new(args.quiet, args.progress_interval);
-    let result = run_case_with(&loaded, &out, &options, &mut |p| shown.report(p));
+    // Split over the ranks of a parallel launch: the first one reports.
+    let transport = launch::rank_transport()?;
+    let first = transport.as_ref().is_none_or(|t| t.rank() == 0);
+    let mut shown = progress::RunProgress::new(args.quiet || !first, args.progress_interval);
+    let result = run_case_split(&loaded, &out, &options, transport, &mut |p| shown.report(p));
     shown.finish();
     match result {
+        // Every rank meets the same end but for a file only it could not write.
+        Ok(_) if !first => Ok(()),
+        Err(e) if !first && !matches!(e, RunError::Output(_)) => {
+            Err((e.exit_code(), String::new()))
+        }
         Ok(s) => {
             println!(
                 "{}: {} fluid particles, {} boundary elements, {} steps in {:.1} s ({:.3e} particle-steps/s), energy drift {:.3e}; outputs in {}",

@@ -1099,21 +1099,37 @@ fn several_processes_of_a_parallel_launcher_are_refused() {
     }
 }
 
-/// `bisph bench --single` splits over the ranks of a parallel launch only when built with
-/// MPI; without it the start is refused, naming the feature.
+/// `bisph run` and `bisph bench --single` split over the ranks of a parallel launch only when
+/// built with MPI; without it the start is refused, naming the feature.
 #[cfg(not(feature = "mpi"))]
 #[test]
-fn a_split_bench_needs_the_mpi_feature() {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_bisph"))
-        .args(["bench", "--single", "dam-break,2,2000,2,1,3"])
-        .env("OMPI_COMM_WORLD_SIZE", "2")
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("started as one of 2 processes") && err.contains("--features mpi"),
-        "{err}"
+fn a_split_run_or_bench_needs_the_mpi_feature() {
+    let case = format!(
+        "{}/../../cases/dam-break-2d.toml",
+        env!("CARGO_MANIFEST_DIR")
     );
-    assert!(o.stdout.is_empty(), "something ran");
+    let out = std::env::temp_dir().join(format!("bisph-split-refused-{}", std::process::id()));
+    let out = out.display().to_string();
+    let commands: [&[&str]; 2] = [
+        &["bench", "--single", "dam-break,2,2000,2,1,3"],
+        &["run", &case, "--out", &out, "--quiet"],
+    ];
+    for args in commands {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_bisph"))
+            .args(args)
+            .env("OMPI_COMM_WORLD_SIZE", "2")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("started as one of 2 processes") && err.contains("--features mpi"),
+            "{args:?}: {err}"
+        );
+        assert!(o.stdout.is_empty(), "{args:?}: something ran");
+        assert!(
+            !std::path::Path::new(&out).exists(),
+            "{args:?}: outputs written"
+        );
+    }
 }

@@ -10,12 +10,16 @@ use mpi::topology::{Communicator, SimpleCommunicator};
 use mpi::traits::CommunicatorCollectives;
 use mpi::Count;
 use std::fmt;
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The processes of an MPI job as the parts of a run: rank `r` of `MPI_COMM_WORLD` is part
-/// `r`. MPI is finalised when it is dropped.
+/// `r`. MPI is finalised when it is dropped, unless this part abandoned the run: then the
+/// process ends without finalising, and the launcher ends the others.
 pub struct MpiTransport {
     world: SimpleCommunicator,
-    _universe: Universe,
+    universe: ManuallyDrop<Universe>,
+    abandoned: AtomicBool,
 }
 
 // SAFETY: MPI is initialised at the `Funneled` level, and a part calls its transport only
@@ -30,8 +34,18 @@ impl MpiTransport {
         let (universe, _) = mpi::initialize_with_threading(mpi::Threading::Funneled)?;
         Some(MpiTransport {
             world: universe.world(),
-            _universe: universe,
+            universe: ManuallyDrop::new(universe),
+            abandoned: AtomicBool::new(false),
         })
+    }
+}
+
+impl Drop for MpiTransport {
+    fn drop(&mut self) {
+        if !self.abandoned.load(Ordering::SeqCst) {
+            // SAFETY: dropped once, here, and not used after.
+            unsafe { ManuallyDrop::drop(&mut self.universe) };
+        }
     }
 }
 
@@ -60,6 +74,10 @@ impl Transport for MpiTransport {
 
     fn parts(&self) -> usize {
         self.world.size() as usize
+    }
+
+    fn abandon(&self) {
+        self.abandoned.store(true, Ordering::SeqCst);
     }
 
     fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message> {

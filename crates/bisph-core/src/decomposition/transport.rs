@@ -30,6 +30,10 @@ pub trait Transport: Send + Sync + fmt::Debug {
     /// Sends `outgoing[q]` to part `q` (one message per part, this part's own included) and
     /// returns the messages every part sent to this one, indexed by sender.
     fn exchange(&self, outgoing: Vec<Message>) -> Vec<Message>;
+
+    /// This part stops before the others (an error only it met): they must not wait for it
+    /// at their next exchange.
+    fn abandon(&self);
 }
 
 /// Appends the components of `v` to `out`, bit for bit.
@@ -148,6 +152,10 @@ impl Transport for Counted {
         self.inner.rank()
     }
 
+    fn abandon(&self) {
+        self.inner.abandon();
+    }
+
     fn parts(&self) -> usize {
         self.inner.parts()
     }
@@ -172,8 +180,8 @@ impl Transport for Counted {
 
 /// Parts as threads of one process: [`InProcess::connect`] gives one end per part, each to be
 /// driven from its own thread. Used to run and test a decomposed simulation without MPI. A
-/// part whose thread panics breaks the transport: the others panic at their next exchange
-/// instead of waiting for it forever.
+/// part whose thread panics, or that abandons the run, breaks the transport: the others panic
+/// at their next exchange instead of waiting for it forever.
 pub struct InProcess {
     rank: usize,
     shared: Arc<Shared>,
@@ -247,11 +255,18 @@ impl InProcess {
     }
 }
 
+impl InProcess {
+    /// Breaks the transport (see the type's documentation).
+    fn break_off(&self) {
+        self.lock().broken = true;
+        self.shared.arrived.notify_all();
+    }
+}
+
 impl Drop for InProcess {
     fn drop(&mut self) {
         if std::thread::panicking() {
-            self.lock().broken = true;
-            self.shared.arrived.notify_all();
+            self.break_off();
         }
     }
 }
@@ -265,6 +280,10 @@ impl fmt::Debug for InProcess {
 impl Transport for InProcess {
     fn rank(&self) -> usize {
         self.rank
+    }
+
+    fn abandon(&self) {
+        self.break_off();
     }
 
     fn parts(&self) -> usize {

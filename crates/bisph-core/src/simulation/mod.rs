@@ -10,6 +10,7 @@ mod settle;
 mod verlet;
 mod wall_models;
 
+pub use part_state::PartLayout;
 pub use settings::{MidpointParams, SettleOutcome, SettleParams, SettleReport};
 pub use wall_models::{UsawParams, WallModelChoice};
 

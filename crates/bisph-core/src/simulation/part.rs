@@ -20,7 +20,9 @@
 //!   have drifted apart, particles that left their region move to its owner, and the halos
 //!   are selected again ([`Simulation::repartition`]).
 
-use super::part_state::{halo_words, set_halo, BadParticle, HaloFields, Part, REBALANCE};
+use super::part_state::{
+    halo_words, set_halo, BadParticle, HaloFields, Part, PartLayout, REBALANCE,
+};
 use super::Simulation;
 use crate::decomposition::{
     all_gather, all_parts, bisect, max_over_parts, push_vector, read_vector, select_halos,
@@ -115,6 +117,65 @@ impl<V: Vector> Simulation<V> {
         self.part.as_ref().map(|p| p.transport.traffic())
     }
 
+    /// This part's layout in its split (`None` for a whole simulation): with the fluid arrays
+    /// of the same moment, what [`Simulation::restore_part_layout`] needs to bring the part
+    /// back to it.
+    pub fn part_layout(&self) -> Option<PartLayout<V>> {
+        self.part.as_ref().map(|p| PartLayout {
+            decomposition: p.decomposition.clone(),
+            owned: p.owned,
+            send: p.send.clone(),
+        })
+    }
+
+    /// Puts back a layout taken by [`Simulation::part_layout`] on this same part, after its
+    /// fluid arrays of that moment were put back: each part of the run must put back the
+    /// layout of the same moment. Returns `false`, changing nothing, for a whole simulation
+    /// or a layout that does not fit the fluid arrays.
+    pub fn restore_part_layout(&mut self, layout: &PartLayout<V>) -> bool {
+        let n = self.fluid.len();
+        let Some(part) = &mut self.part else {
+            return false;
+        };
+        let fits = layout.owned <= n
+            && layout.send.len() == part.transport.parts()
+            && layout
+                .send
+                .iter()
+                .flatten()
+                .all(|&i| (i as usize) < layout.owned);
+        if !fits {
+            return false;
+        }
+        part.decomposition.clone_from(&layout.decomposition);
+        part.owned = layout.owned;
+        part.send.clone_from(&layout.send);
+        self.mark_elements_in_reach();
+        true
+    }
+
+    /// Every part's `words`, in part order (every part must call it; a whole simulation gets
+    /// its own back).
+    pub fn gather_over_parts(&self, words: Message) -> Vec<Message> {
+        match &self.part {
+            Some(part) => all_gather(&part.transport, words),
+            None => vec![words],
+        }
+    }
+
+    /// Tells the other parts that this one stops here, on an error only it met: they do not
+    /// wait for it (see [`Transport::abandon`]). Nothing to do for a whole simulation.
+    pub fn abandon_split(&self) {
+        if let Some(part) = &self.part {
+            part.transport.abandon();
+        }
+    }
+
+    /// `true` when `value` holds on at least one part (every part must call it).
+    pub fn on_any_part(&self, value: bool) -> bool {
+        !self.on_all_parts(!value)
+    }
+
     /// Number of times the regions of a split run were cut again since it was split (0 for a
     /// whole simulation).
     pub fn rebalances(&self) -> u64 {
@@ -171,6 +232,27 @@ impl<V: Vector> Simulation<V> {
             *points = by_id.iter().map(|&i| points[i as usize]).collect();
         }
         (fluid, built_at)
+    }
+
+    /// The wall pressures of every element, each from the part that counts it in sums over
+    /// the elements ([`Simulation::element_counter`]): a part evaluates only those within
+    /// reach of its region. Every part must call it, and each gets them all.
+    pub fn gathered_wall_pressures(&self) -> Vec<f64> {
+        let mut pressure = self.walls.elements.pressure.clone();
+        let Some(part) = &self.part else {
+            return pressure;
+        };
+        let counts = self.element_counter();
+        let mut words = Vec::new();
+        for (j, p) in pressure.iter().enumerate().filter(|&(j, _)| counts(j)) {
+            words.extend([j as u64, p.to_bits()]);
+        }
+        for message in all_gather(&part.transport, words) {
+            for pair in message.chunks_exact(2) {
+                pressure[pair[0] as usize] = f64::from_bits(pair[1]);
+            }
+        }
+        pressure
     }
 
     /// Adds `sums` over the parts (nothing to do for a whole simulation).

@@ -30,6 +30,23 @@ pub(crate) struct Part<V: Vector> {
     pub(super) rebalances: u64,
 }
 
+/// Where a part stands in its split: the regions, how many of its particles are its own, and
+/// which of them each other part holds in its halo. With its fluid arrays, what a part needs
+/// to go back to an earlier state ([`crate::Simulation::part_layout`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartLayout<V: Vector> {
+    pub(super) decomposition: Decomposition<V>,
+    pub(super) owned: usize,
+    pub(super) send: Vec<Vec<u32>>,
+}
+
+impl<V: Vector> PartLayout<V> {
+    /// Number of the part's own particles (stored first).
+    pub fn owned(&self) -> usize {
+        self.owned
+    }
+}
+
 /// When a split run cuts its regions again: at a neighbour-list rebuild, once the part with
 /// the most particles holds 10% more than the mean.
 pub(super) const REBALANCE: RebalancePolicy = RebalancePolicy { threshold: 1.1 };

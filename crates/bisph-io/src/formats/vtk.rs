@@ -1,4 +1,5 @@
-//! A small VTK XML writer (`.vtu` unstructured grids and `.pvd` collections).
+//! A small VTK XML writer (`.vtu` unstructured grids, `.pvtu` indices of pieces written by
+//! several processes, and `.pvd` collections).
 //!
 //! Files use the "appended" raw binary layout (`header_type="UInt64"`,
 //! little endian) that ParaView and VTK read directly. Every file is first
@@ -66,6 +67,45 @@ pub fn write_cells_vtu(
     check_arrays(cell_data, cells.len(), "cell")?;
     let cells = Cells::List(cells);
     write_atomic(path, |w| write_vtu(w, vertices, &cells, &[], cell_data))
+}
+
+/// Write a `.pvtu` index of point pieces: `pieces` are `.vtu` files of isolated points (as
+/// [`write_points_vtu`] writes them; names relative to `path`), each with the arrays named
+/// in `point_data` (only their names, components and kinds are read here).
+pub fn write_points_pvtu(
+    path: &Path,
+    pieces: &[String],
+    point_data: &[DataArray],
+) -> io::Result<()> {
+    write_atomic(path, |w| {
+        w.write_all(b"<?xml version=\"1.0\"?>\n")?;
+        w.write_all(
+            b"<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+        )?;
+        w.write_all(b"  <PUnstructuredGrid GhostLevel=\"0\">\n    <PPointData>\n")?;
+        for a in point_data {
+            writeln!(
+                w,
+                "      <PDataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"/>",
+                if a.integer { "Int64" } else { "Float64" },
+                escape_xml(a.name),
+                a.components
+            )?;
+        }
+        w.write_all(b"    </PPointData>\n    <PPoints>\n")?;
+        w.write_all(
+            b"      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n",
+        )?;
+        w.write_all(b"    </PPoints>\n    <PCells>\n")?;
+        w.write_all(b"      <PDataArray type=\"Int64\" Name=\"connectivity\"/>\n")?;
+        w.write_all(b"      <PDataArray type=\"Int64\" Name=\"offsets\"/>\n")?;
+        w.write_all(b"      <PDataArray type=\"UInt8\" Name=\"types\"/>\n")?;
+        w.write_all(b"    </PCells>\n")?;
+        for piece in pieces {
+            writeln!(w, "    <Piece Source=\"{}\"/>", escape_xml(piece))?;
+        }
+        w.write_all(b"  </PUnstructuredGrid>\n</VTKFile>\n")
+    })
 }
 
 /// A `.pvd` collection: a time series index of dataset files.

@@ -32,7 +32,7 @@ use crate::formats::files::OutputError;
 use bisph_core::bodies::{FreeBody, Motion};
 use bisph_core::forcing::FluxHistory;
 use bisph_core::particles::Fluid;
-use bisph_core::simulation::SettleReport;
+use bisph_core::simulation::{PartLayout, SettleReport};
 use bisph_core::{Simulation, Vector};
 use glam::{DQuat, DVec3};
 use std::path::{Path, PathBuf};
@@ -187,6 +187,9 @@ pub struct SimState<V: Vector> {
     pub pistons: Vec<(u32, f64, f64, f64)>,
     /// Free rigid bodies in body order: (body index, [`free_body_values`]).
     pub free_bodies: Vec<(u32, [f64; FREE_BODY_VALUES])>,
+    /// The layout of a part of a split run, whose own fluid and halo [`SimState::fluid`]
+    /// then holds (`None` for the state of a whole run, the only one a checkpoint file holds).
+    pub layout: Option<PartLayout<V>>,
 }
 
 /// Numbers of a free body's evolving state in a checkpoint.
@@ -237,10 +240,14 @@ impl<V: Vector> SimState<V> {
             let (fluid, origin) = sim.gathered();
             self.fluid = fluid;
             self.neighbour_origin = origin.unwrap_or_default();
+            self.pressure = sim.gathered_wall_pressures();
+            self.layout = None;
         }
     }
 
-    /// Copies the state of `sim` into `self`, reusing its buffers (no allocation once warm).
+    /// Copies the state of `sim` into `self`, reusing its buffers (no allocation once warm,
+    /// but for the layout of a part of a split run). A part's state goes back into that part
+    /// only ([`SimState::restore`]); [`SimState::capture_whole`] gives the whole run's.
     pub fn capture(&mut self, sim: &Simulation<V>) {
         self.time = sim.time;
         self.step = sim.step;
@@ -297,11 +304,23 @@ impl<V: Vector> SimState<V> {
                 _ => {}
             }
         }
+        self.layout = sim.part_layout();
     }
 
-    /// Puts this state into `sim` (built from the same case) and rebuilds its cell grids.
-    /// Fails, changing nothing, when the counts do not fit.
+    /// Puts this state into `sim` (built from the same case) and rebuilds its cell grids:
+    /// the state of a whole run into a whole simulation, the state of a part of a split run
+    /// into that part (every part at once, with states of the same moment). Fails, changing
+    /// nothing, when the counts do not fit.
     pub fn restore(&self, sim: &mut Simulation<V>) -> Result<(), String> {
+        match (&self.layout, sim.is_part()) {
+            (None, true) => {
+                return Err("the state of a whole run goes into a whole simulation".into())
+            }
+            (Some(_), false) => {
+                return Err("the state of a part of a split run goes into that part".into())
+            }
+            _ => {}
+        }
         self.check_fluid_counts(sim)?;
         self.check_wall_counts(sim)?;
         self.check_fluid_values(sim)?;
@@ -312,6 +331,9 @@ impl<V: Vector> SimState<V> {
         self.put_fluid(sim);
         self.put_walls(sim);
         self.put_bodies(sim);
+        if let Some(layout) = &self.layout {
+            sim.restore_part_layout(layout);
+        }
         // A list that does not fit (a damaged file whose checksum still matched) is rebuilt at
         // the next step instead.
         let origin = &self.neighbour_origin;
@@ -349,13 +371,24 @@ impl<V: Vector> SimState<V> {
         if !(self.neighbour_origin.is_empty() || self.neighbour_origin.len() == n) {
             return Err("neighbour-list positions of another length than the fluid".into());
         }
-        if n != sim.fluid.len() {
-            return Err(format!(
-                "{n} fluid particles saved, the case builds {}",
-                sim.fluid.len()
-            ));
-        }
-        let mut seen = vec![false; n];
+        // A part holds some of the ids, its own first; a whole run holds each id of the case.
+        let slots = match &self.layout {
+            Some(layout) if layout.owned() > n => {
+                return Err(format!(
+                    "{n} fluid particles saved for a part owning {}",
+                    layout.owned()
+                ))
+            }
+            Some(_) => f.id.iter().max().map_or(0, |&m| m as usize + 1),
+            None if n != sim.fluid.len() => {
+                return Err(format!(
+                    "{n} fluid particles saved, the case builds {}",
+                    sim.fluid.len()
+                ))
+            }
+            None => n,
+        };
+        let mut seen = vec![false; slots];
         for &id in &f.id {
             match seen.get_mut(id as usize) {
                 Some(s) if !*s => *s = true,

@@ -161,9 +161,9 @@ fn report<V: Vector>(sim: &Simulation<V>, i: usize, value: f64) -> ParticleRepor
 }
 
 /// A diagnosis for one of the simulation's own stops, naming its particle from the current
-/// (bad) state.
+/// (bad) state. In a split run every part must call it (it gathers the particle from its
+/// owner), and each gets the same diagnosis.
 pub fn from_sim_error<V: Vector>(e: &SimError, sim: &Simulation<V>) -> Diagnosis {
-    let find = |id: u32| sim.fluid.id.iter().position(|&k| k == id);
     let (kind, quantity, allowed, value, particle) = match e {
         SimError::NonFinite {
             particle, quantity, ..
@@ -198,19 +198,19 @@ pub fn from_sim_error<V: Vector>(e: &SimError, sim: &Simulation<V>) -> Diagnosis
         | SimError::LeftDomain { step, time, .. }
         | SimError::TimeStepCollapse { step, time, .. } => (*step, *time),
     };
-    let mut particles = Vec::new();
-    match particle {
+    let named = match particle {
         Some(id) => {
-            if let Some(i) = find(id) {
-                particles.push(report(sim, i, value));
-            }
+            let own = &sim.fluid.id[..sim.owned_len()];
+            let found = own.iter().position(|&k| k == id);
+            let local: Vec<_> = found
+                .map(|i| (0.0, report(sim, i, value)))
+                .into_iter()
+                .collect();
+            worst_over_parts(sim, local.len(), local, 1)
         }
-        None => {
-            if let Some(i) = largest_acceleration(sim) {
-                particles.push(report(sim, i, sim.fluid.acceleration[i].length()));
-            }
-        }
-    }
+        None => largest_acceleration(sim),
+    };
+    let particles: Vec<ParticleReport> = named.worst.into_iter().map(|(_, r)| r).collect();
     Diagnosis {
         kind,
         exit_code: kind.exit_code(),
@@ -228,13 +228,89 @@ pub fn from_sim_error<V: Vector>(e: &SimError, sim: &Simulation<V>) -> Diagnosis
     }
 }
 
-fn largest_acceleration<V: Vector>(sim: &Simulation<V>) -> Option<usize> {
-    let a = &sim.fluid.acceleration;
-    (0..a.len()).max_by(|&i, &j| {
-        a[i].length_squared()
-            .total_cmp(&a[j].length_squared())
-            .then(sim.fluid.id[j].cmp(&sim.fluid.id[i]))
-    })
+/// The particle with the largest acceleration (the lowest id among equals), over every part.
+fn largest_acceleration<V: Vector>(sim: &Simulation<V>) -> Violators {
+    fastest(sim, &sim.fluid.acceleration)
+}
+
+/// The particle with the largest `|v|` of `values` (the lowest id among equals), over the own
+/// particles of every part, with `|v|` as its value.
+fn fastest<V: Vector>(sim: &Simulation<V>, values: &[V]) -> Violators {
+    let id = &sim.fluid.id;
+    let local = (0..sim.owned_len()).max_by(|&i, &j| {
+        values[i]
+            .length_squared()
+            .total_cmp(&values[j].length_squared())
+            .then(id[j].cmp(&id[i]))
+    });
+    let local: Vec<_> = local
+        .map(|i| {
+            let v = values[i].length();
+            (v, report(sim, i, v))
+        })
+        .into_iter()
+        .collect();
+    let mut found = worst_over_parts(sim, local.len(), local, 1);
+    found.count = found.worst.len();
+    found
+}
+
+/// Particles named by a watch: the worst few, worst first with their severities, and how many
+/// there were in all.
+struct Violators {
+    worst: Vec<(f64, ParticleReport)>,
+    count: usize,
+}
+
+/// Words of one [`ParticleReport`] with its severity in a message.
+const REPORT_WORDS: usize = 10;
+
+/// The `limit` worst of `local` (some of this simulation's `count` own particles named by a
+/// watch, each with its severity) over every part, worst first (ties by id), and how many
+/// were named in all: in a split run every part must call it, and each gets the same list,
+/// the one a whole run finds.
+fn worst_over_parts<V: Vector>(
+    sim: &Simulation<V>,
+    mut count: usize,
+    mut local: Vec<(f64, ParticleReport)>,
+    limit: usize,
+) -> Violators {
+    let order = |a: &(f64, ParticleReport), b: &(f64, ParticleReport)| {
+        b.0.total_cmp(&a.0).then(a.1.id.cmp(&b.1.id))
+    };
+    local.sort_by(order);
+    local.truncate(limit);
+    if !sim.is_part() {
+        return Violators {
+            worst: local,
+            count,
+        };
+    }
+    let mut words = vec![count as u64];
+    for (severity, r) in &local {
+        words.extend([severity.to_bits(), u64::from(r.id)]);
+        words.extend(r.position.iter().chain(&r.velocity).map(|x| x.to_bits()));
+        words.extend([r.density.to_bits(), r.value.to_bits()]);
+    }
+    let mut worst = Vec::new();
+    count = 0;
+    for message in sim.gather_over_parts(words) {
+        count += message[0] as usize;
+        for w in message[1..].chunks_exact(REPORT_WORDS) {
+            let x = |k: usize| f64::from_bits(w[k]);
+            let report = ParticleReport {
+                id: w[1] as u32,
+                position: [x(2), x(3), x(4)],
+                velocity: [x(5), x(6), x(7)],
+                density: x(8),
+                value: x(9),
+            };
+            worst.push((x(0), report));
+        }
+    }
+    worst.sort_by(order);
+    worst.truncate(limit);
+    Violators { worst, count }
 }
 
 /// The watches, with their scratch buffers.
@@ -283,7 +359,7 @@ impl Watch {
                 None
             }
         });
-        if !bad.is_empty() {
+        if bad.count > 0 {
             return Some(diagnosis(
                 sim,
                 TripKind::DensityRatio,
@@ -298,7 +374,7 @@ impl Watch {
             let u = sim.fluid.velocity[i].length();
             (u > limit).then_some((u, u))
         });
-        if !bad.is_empty() {
+        if bad.count > 0 {
             return Some(diagnosis(
                 sim,
                 TripKind::Speed,
@@ -322,10 +398,7 @@ impl Watch {
                         s.dt_collapse,
                         s.dt_collapse * dt0
                     ),
-                    largest_acceleration(sim)
-                        .map(|i| (i, 0.0, sim.fluid.acceleration[i].length()))
-                        .into_iter()
-                        .collect(),
+                    largest_acceleration(sim),
                 );
                 d.value = dt;
                 return Some(d);
@@ -354,16 +427,16 @@ impl Watch {
         previous: &SimState<V>,
     ) -> Option<Diagnosis> {
         let f = &sim.fluid;
-        let n = f.len();
+        // Where each particle was before the step, by id. A part of a split run finds there
+        // its own particles and its halo of that moment: a particle it took over at a cut of
+        // new regions during the step may be missing, and is then tested as if it had not
+        // moved.
+        let ids = previous.fluid.id.iter();
+        let slots = ids.clone().max().map_or(0, |&m| m as usize + 1);
         self.previous_index.clear();
-        self.previous_index.resize(n, u32::MAX);
-        // The path test needs the same particles before and after the step.
-        if previous.fluid.id.len() == n {
-            for (k, &id) in previous.fluid.id.iter().enumerate() {
-                if let Some(slot) = self.previous_index.get_mut(id as usize) {
-                    *slot = k as u32;
-                }
-            }
+        self.previous_index.resize(slots, u32::MAX);
+        for (k, &id) in ids.enumerate() {
+            self.previous_index[id as usize] = k as u32;
         }
         let e = &sim.walls.elements;
         let support = sim.config.kernel.support;
@@ -430,7 +503,7 @@ impl Watch {
             }
             depth.filter(|&d| d > tolerance).map(|d| (d, d))
         });
-        if bad.is_empty() {
+        if bad.count == 0 {
             return None;
         }
         Some(diagnosis(
@@ -485,19 +558,25 @@ fn inside_element<V: Vector>(x: V, normal: V, corners: &[V]) -> bool {
     }
 }
 
-/// Particles for which `test` gives `(severity, value)`, worst first (ties by id): in memory
-/// order through an ordered parallel collect, so the result does not depend on threads.
+/// Particles for which `test` gives `(severity, value)`, over the own particles of every part
+/// (see [`worst_over_parts`]): found in memory order through an ordered parallel collect, so
+/// the result does not depend on threads.
 fn violators<V: Vector>(
     sim: &Simulation<V>,
     test: impl Fn(usize) -> Option<(f64, f64)> + Sync,
-) -> Vec<(usize, f64, f64)> {
-    let mut bad: Vec<(usize, f64, f64)> = (0..sim.fluid.len())
+) -> Violators {
+    let mut bad: Vec<(usize, f64, f64)> = (0..sim.owned_len())
         .into_par_iter()
         .filter_map(|i| test(i).map(|(sev, v)| (i, sev, v)))
         .collect();
     let id = &sim.fluid.id;
     bad.sort_by(|a, b| b.1.total_cmp(&a.1).then(id[a.0].cmp(&id[b.0])));
-    bad
+    let local = bad
+        .iter()
+        .take(MAX_REPORTED)
+        .map(|&(i, severity, v)| (severity, report(sim, i, v)))
+        .collect();
+    worst_over_parts(sim, bad.len(), local, MAX_REPORTED)
 }
 
 fn diagnosis<V: Vector>(
@@ -505,9 +584,9 @@ fn diagnosis<V: Vector>(
     kind: TripKind,
     quantity: &str,
     allowed: String,
-    bad: Vec<(usize, f64, f64)>,
+    bad: Violators,
 ) -> Diagnosis {
-    let value = bad.first().map_or(f64::NAN, |b| b.2);
+    let value = bad.worst.first().map_or(f64::NAN, |b| b.1.value);
     Diagnosis {
         kind,
         exit_code: kind.exit_code(),
@@ -516,12 +595,8 @@ fn diagnosis<V: Vector>(
         allowed,
         step: sim.step,
         time: sim.time,
-        particles_tripped: bad.len(),
-        particles: bad
-            .iter()
-            .take(MAX_REPORTED)
-            .map(|&(i, _, v)| report(sim, i, v))
-            .collect(),
+        particles_tripped: bad.count,
+        particles: bad.worst.into_iter().map(|(_, r)| r).collect(),
         last_good_step: 0,
         last_good_time: 0.0,
         checkpoint: None,
@@ -547,24 +622,15 @@ pub fn energy_growth<V: Vector>(
     }
     let growth = (total - e0) / scale;
     if growth > settings.energy_growth || growth.is_nan() {
+        // Name the fastest particle: energy grows where the speed does.
         let mut d = diagnosis(
             sim,
             TripKind::EnergyGrowth,
             "energy growth (E - E0) / E_scale",
             format!("<= {} (diagnostics.energy_growth)", settings.energy_growth),
-            Vec::new(),
+            fastest(sim, &sim.fluid.velocity),
         );
         d.value = growth;
-        // Name the fastest particle: energy grows where the speed does.
-        let u = &sim.fluid.velocity;
-        if let Some(i) = (0..u.len()).max_by(|&i, &j| {
-            u[i].length_squared()
-                .total_cmp(&u[j].length_squared())
-                .then(sim.fluid.id[j].cmp(&sim.fluid.id[i]))
-        }) {
-            d.particles.push(report(sim, i, u[i].length()));
-            d.particles_tripped = 1;
-        }
         return Some(d);
     }
     None

@@ -12,6 +12,6 @@ pub mod shepard;
 
 pub use error::RunError;
 pub use runner::{
-    build_checked, resume_case, run_built, run_case, run_case_with, settle_fresh, settle_resumable,
-    Progress, RunOptions, Summary,
+    build_checked, resume_case, run_built, run_case, run_case_split, run_case_with, run_split,
+    settle_fresh, settle_resumable, Progress, RunOptions, Summary,
 };

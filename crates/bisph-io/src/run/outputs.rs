@@ -4,19 +4,25 @@
 //! and body axes, energies and the fluid's load).
 
 use crate::formats::files::{at, OutputError};
-use crate::formats::vtk::{write_cells_vtu, write_points_vtu, DataArray, PvdCollection};
+use crate::formats::vtk::{
+    write_cells_vtu, write_points_pvtu, write_points_vtu, DataArray, PvdCollection,
+};
 use bisph_core::bodies::angular_to_3d;
 use bisph_core::bodies::FreeBody;
 use bisph_core::{Simulation, Vector};
 use glam::{DVec3, EulerRot};
 use std::path::{Path, PathBuf};
 
-/// VTK frames of the fluid and the walls with their `.pvd` indices.
+/// VTK frames of the fluid and the walls with their `.pvd` indices. A whole run writes the
+/// fluid of a frame as one `.vtu`; a split run writes one `.vtu` piece per part, of its own
+/// particles, and the first part writes their `.pvtu` index, the walls and the `.pvd` files.
 pub struct Frames {
     dir: PathBuf,
     fluid: PvdCollection,
     walls: PvdCollection,
     times: Vec<f64>,
+    /// The fluid file of each frame, relative to `dir`.
+    fluid_files: Vec<String>,
 }
 
 impl Frames {
@@ -29,19 +35,26 @@ impl Frames {
             fluid: PvdCollection::new(),
             walls: PvdCollection::new(),
             times: Vec::new(),
+            fluid_files: Vec::new(),
         })
     }
 
-    /// Frames already written at `times` (a resumed run): the `.pvd` indices are rewritten
-    /// to list exactly these, and later frames continue the numbering.
-    pub fn resume(dir: &Path, times: &[f64]) -> Result<Self, OutputError> {
+    /// Frames already written at `times` (a resumed run, split or not as before): the `.pvd`
+    /// indices are rewritten by `writer` to list exactly these, and later frames continue the
+    /// numbering.
+    pub fn resume(dir: &Path, times: &[f64], writer: bool) -> Result<Self, OutputError> {
         let mut frames = Frames::new(dir)?;
         for (k, &t) in times.iter().enumerate() {
-            frames.fluid.push(t, 0, &format!("vtk/fluid_{k:06}.vtu"));
-            frames.walls.push(t, 0, &format!("vtk/walls_{k:06}.vtu"));
+            let split = fluid_file(k, true);
+            let name = match dir.join(&split).exists() {
+                true => split,
+                false => fluid_file(k, false),
+            };
+            frames.push(t, name, k);
         }
-        frames.times = times.to_vec();
-        frames.write_indices()?;
+        if writer {
+            frames.write_indices()?;
+        }
         Ok(frames)
     }
 
@@ -57,8 +70,14 @@ impl Frames {
 
     /// The fluid file of the last frame, relative to the output directory.
     pub fn last_fluid_file(&self) -> Option<String> {
-        let k = self.times.len().checked_sub(1)?;
-        Some(format!("vtk/fluid_{k:06}.vtu"))
+        self.fluid_files.last().cloned()
+    }
+
+    fn push(&mut self, time: f64, fluid_name: String, k: usize) {
+        self.fluid.push(time, 0, &fluid_name);
+        self.walls.push(time, 0, &walls_file(k));
+        self.fluid_files.push(fluid_name);
+        self.times.push(time);
     }
 
     fn write_indices(&self) -> Result<(), OutputError> {
@@ -68,57 +87,67 @@ impl Frames {
         at(&walls_pvd, self.walls.write(&walls_pvd))
     }
 
-    /// Writes one frame of the current state.
+    /// Writes one frame of the current state (every part of a split run must call it).
     pub fn write<V: Vector>(&mut self, sim: &Simulation<V>) -> Result<(), OutputError> {
         let k = self.times.len();
+        let wall_pressure = sim.gathered_wall_pressures();
+        let name = fluid_file(k, sim.is_part());
         let f = &sim.fluid;
-        let points: Vec<[f64; 3]> = f.position.iter().map(|r| r.to_xyz()).collect();
-        let velocity: Vec<f64> = f.velocity.iter().flat_map(|u| u.to_xyz()).collect();
-        let acceleration: Vec<f64> = f.acceleration.iter().flat_map(|a| a.to_xyz()).collect();
-        let id: Vec<f64> = f.id.iter().map(|&i| i as f64).collect();
-        let fluid_name = format!("vtk/fluid_{k:06}.vtu");
-        let path = self.dir.join(&fluid_name);
-        at(
-            &path,
-            write_points_vtu(
-                &path,
-                &points,
-                &[
-                    DataArray {
-                        name: "velocity",
-                        components: 3,
-                        values: &velocity,
-                        integer: false,
-                    },
-                    DataArray {
-                        name: "acceleration",
-                        components: 3,
-                        values: &acceleration,
-                        integer: false,
-                    },
-                    DataArray {
-                        name: "pressure",
-                        components: 1,
-                        values: &f.pressure,
-                        integer: false,
-                    },
-                    DataArray {
-                        name: "density",
-                        components: 1,
-                        values: &f.density,
-                        integer: false,
-                    },
-                    DataArray {
-                        name: "id",
-                        components: 1,
-                        values: &id,
-                        integer: true,
-                    },
-                ],
-            ),
-        )?;
-        self.fluid.push(sim.time, 0, &fluid_name);
+        let own = 0..sim.owned_len();
+        let points: Vec<[f64; 3]> = f.position[own.clone()].iter().map(|r| r.to_xyz()).collect();
+        let velocity: Vec<f64> = f.velocity[own.clone()]
+            .iter()
+            .flat_map(|u| u.to_xyz())
+            .collect();
+        let acceleration: Vec<f64> = f.acceleration[own.clone()]
+            .iter()
+            .flat_map(|a| a.to_xyz())
+            .collect();
+        let id: Vec<f64> = f.id[own.clone()].iter().map(|&i| i as f64).collect();
+        let array = |name, components, values, integer| DataArray {
+            name,
+            components,
+            values,
+            integer,
+        };
+        let arrays = [
+            array("velocity", 3, &velocity, false),
+            array("acceleration", 3, &acceleration, false),
+            array("pressure", 1, &f.pressure[own.clone()], false),
+            array("density", 1, &f.density[own], false),
+            array("id", 1, &id, true),
+        ];
+        let piece = match sim.is_part() {
+            true => piece_file(k, sim.rank()),
+            false => name.clone(),
+        };
+        let path = self.dir.join(&piece);
+        at(&path, write_points_vtu(&path, &points, &arrays))?;
+        if sim.rank() == 0 {
+            if sim.is_part() {
+                // The pieces lie next to their index.
+                let pieces: Vec<String> = (0..sim.parts())
+                    .map(|r| piece_file(k, r).trim_start_matches("vtk/").to_string())
+                    .collect();
+                let path = self.dir.join(&name);
+                at(&path, write_points_pvtu(&path, &pieces, &arrays))?;
+            }
+            self.write_walls(sim, &wall_pressure, k)?;
+        }
+        self.push(sim.time, name, k);
+        match sim.rank() {
+            0 => self.write_indices(),
+            _ => Ok(()),
+        }
+    }
 
+    /// The walls of frame `k`.
+    fn write_walls<V: Vector>(
+        &self,
+        sim: &Simulation<V>,
+        pressure: &[f64],
+        k: usize,
+    ) -> Result<(), OutputError> {
         let e = &sim.walls.elements;
         let mut vertices = Vec::new();
         let mut cells = Vec::with_capacity(e.len());
@@ -131,8 +160,7 @@ impl Frames {
         let normal: Vec<f64> = e.normal.iter().flat_map(|n| n.to_xyz()).collect();
         let wall_velocity: Vec<f64> = e.velocity.iter().flat_map(|n| n.to_xyz()).collect();
         let body: Vec<f64> = e.body.iter().map(|&b| b as f64).collect();
-        let walls_name = format!("vtk/walls_{k:06}.vtu");
-        let path = self.dir.join(&walls_name);
+        let path = self.dir.join(walls_file(k));
         at(
             &path,
             write_cells_vtu(
@@ -155,7 +183,7 @@ impl Frames {
                     DataArray {
                         name: "pressure",
                         components: 1,
-                        values: &e.pressure,
+                        values: pressure,
                         integer: false,
                     },
                     DataArray {
@@ -172,11 +200,26 @@ impl Frames {
                     },
                 ],
             ),
-        )?;
-        self.walls.push(sim.time, 0, &walls_name);
-        self.times.push(sim.time);
-        self.write_indices()
+        )
     }
+}
+
+/// The fluid file of frame `k`: a `.vtu`, or the `.pvtu` index of a split run's pieces.
+fn fluid_file(k: usize, split: bool) -> String {
+    match split {
+        true => format!("vtk/fluid_{k:06}.pvtu"),
+        false => format!("vtk/fluid_{k:06}.vtu"),
+    }
+}
+
+/// The piece of frame `k` written by part `rank` of a split run.
+fn piece_file(k: usize, rank: usize) -> String {
+    format!("vtk/fluid_{k:06}_{rank}.vtu")
+}
+
+/// The walls file of frame `k`.
+fn walls_file(k: usize) -> String {
+    format!("vtk/walls_{k:06}.vtu")
 }
 
 /// Columns of `body_<name>.csv`. World axes: `x..`, `vx..`, `ax..`, `wx..` (angular velocity),

@@ -15,6 +15,7 @@ use crate::run::error::RunError;
 use crate::run::outputs::Frames;
 use crate::run::settle::SettlingSummary;
 use bisph_core::bodies::Motion;
+use bisph_core::decomposition::Transport;
 use bisph_core::simulation::{MidpointParams, SettleReport};
 use bisph_core::Simulation;
 use serde::Serialize;
@@ -97,8 +98,10 @@ pub struct Summary {
     pub residue_max: f64,
     /// Steps that ended without reaching the residue tolerance.
     pub unconverged_steps: u64,
-    /// Threads used.
+    /// Threads used (by each process of a split run).
     pub threads: usize,
+    /// Processes the run was split over (1 for a run in one process).
+    pub ranks: usize,
     /// VTK frames written.
     pub frames: usize,
     /// Checkpoints written by this invocation.
@@ -131,13 +134,15 @@ const SETTLING_FILE: &str = "settling.json";
 /// Settles a fresh run when the case asks for it, or continues the settling that a checkpoint
 /// taken before `t = 0` holds, and writes `settling.json`; a run resumed after `t = 0` reads
 /// that report back (its checkpoint already holds the settled state). Returns the settling
-/// report and the checkpoint the run itself resumes from (none after settling).
+/// report and the checkpoint the run itself resumes from (none after settling). Only the
+/// `writer` touches files: the other processes of a split run settle the same whole fluid.
 fn settle_or_recall<V: CaseDim>(
     loaded: &LoadedCase,
     sim: &mut Simulation<V>,
     out: &Path,
     resumed: Option<Checkpoint<V>>,
     options: &RunOptions,
+    writer: bool,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(Option<SettlingSummary>, Option<Checkpoint<V>>), RunError> {
     let path = out.join(SETTLING_FILE);
@@ -153,24 +158,32 @@ fn settle_or_recall<V: CaseDim>(
         None => {
             // A checkpoint left by an earlier run in this folder must not be resumed from
             // once this one has started.
-            if checkpoint_path.exists() {
+            if writer && checkpoint_path.exists() {
                 at(&checkpoint_path, std::fs::remove_file(&checkpoint_path))?;
             }
             None
         }
     };
-    if path.exists() {
+    if writer && path.exists() {
         at(&path, std::fs::remove_file(&path))?;
     }
-    let settling = settle_resumable(
+    let checkpoints = SettlingCheckpoints {
+        path: checkpoint_path,
+        case_source: canonical_source(loaded),
+        loaded,
+        options,
+        writer,
+    };
+    let continued = settling_state.and_then(|c| c.settling.map(|report| (c.sim, report)));
+    let settling = settle_checkpointed(
         loaded,
         sim,
-        settling_state,
-        &checkpoint_path,
-        options,
+        continued,
+        Some(&checkpoints),
+        options.stop,
         progress,
     )?;
-    if let Some(s) = &settling {
+    if let (Some(s), true) = (&settling, writer) {
         write_settling(out, s)?;
     }
     Ok((settling, None))
@@ -193,6 +206,7 @@ pub fn settle_resumable<V: CaseDim>(
         case_source: canonical_source(loaded),
         loaded,
         options,
+        writer: true,
     };
     let continued = resumed.and_then(|c| c.settling.map(|report| (c.sim, report)));
     settle_checkpointed(
@@ -224,6 +238,8 @@ struct SettlingCheckpoints<'a> {
     case_source: String,
     loaded: &'a LoadedCase,
     options: &'a RunOptions<'a>,
+    /// Whether this process writes them (the first of a split run's).
+    writer: bool,
 }
 
 /// Settles `sim` (built fresh from the case) when the case asks for it: from the start, or
@@ -264,7 +280,7 @@ fn settle_checkpointed<V: CaseDim>(
             settling: true,
         });
         let signalled = stop.is_some_and(|s| s.load(Ordering::SeqCst));
-        if let Some(c) = checkpoints {
+        if let Some(c) = checkpoints.filter(|c| c.writer) {
             let section = &c.loaded.case.checkpoint;
             if checkpoint_due(section, c.options, report.steps, last_checkpoint, signalled) {
                 saved.case_source.clone_from(&c.case_source);
@@ -375,10 +391,22 @@ pub fn run_case_with(
     options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
+    run_case_split(loaded, out, options, None, progress)
+}
+
+/// Runs the case in its dimension with options, split over the parts `transport` joins when
+/// given; see [`run_split`].
+pub fn run_case_split(
+    loaded: &LoadedCase,
+    out: &Path,
+    options: &RunOptions,
+    transport: Option<Box<dyn Transport>>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
     if loaded.case.dim == 2 {
-        run::<glam::DVec2>(loaded, out, options, progress)
+        run_split::<glam::DVec2>(loaded, out, options, transport, progress)
     } else {
-        run::<glam::DVec3>(loaded, out, options, progress)
+        run_split::<glam::DVec3>(loaded, out, options, transport, progress)
     }
 }
 
@@ -497,8 +525,9 @@ fn series_headers<V: CaseDim>(
 }
 
 /// Where a run starts: its open CSV series, VTK frames, counters and histories, either fresh
-/// (files created with their headers, stale checkpoints removed) or from a checkpoint (the
-/// state restored, every series cut back to its saved length).
+/// (files created with their headers, stale checkpoints removed) or from a checkpoint whose
+/// state the simulation already holds (every series cut back to its saved length). Only the
+/// `writer` (the first process of a split run) touches the files.
 struct RunStart {
     outputs: Outputs,
     free_csv: Vec<Series>,
@@ -510,15 +539,22 @@ struct RunStart {
     resumed_from_step: Option<u64>,
 }
 
-/// Opens the outputs of a run, fresh or resumed from `resumed` (see [`RunStart`]).
+/// The files a run opens besides its frames: the CSV series (`None` where the case writes
+/// none) and each free body's series.
+struct SeriesFiles<'a> {
+    headers: &'a [Option<Vec<String>>; checkpoint::SERIES],
+    free_bodies: &'a [PathBuf],
+}
+
+/// Opens the outputs of a run, fresh or resumed from the counters and histories of a
+/// checkpoint (see [`RunStart`]).
 fn start_run<V: CaseDim>(
     loaded: &LoadedCase,
     out: &Path,
-    sim: &mut Simulation<V>,
-    resumed: Option<Checkpoint<V>>,
-    checkpoint_path: &Path,
-    headers: &[Option<Vec<String>>; checkpoint::SERIES],
-    free_csv_paths: &[PathBuf],
+    sim: &Simulation<V>,
+    resumed: Option<Resumed>,
+    files: SeriesFiles,
+    writer: bool,
 ) -> Result<RunStart, RunError> {
     let mut outputs = Outputs {
         series: Default::default(),
@@ -526,43 +562,22 @@ fn start_run<V: CaseDim>(
     let mut free_csv = Vec::new();
     match resumed {
         Some(c) => {
-            c.sim
-                .restore(sim)
-                .and_then(|_| {
-                    c.run.check(
-                        sim.time,
-                        loaded.case.output.series_interval,
-                        loaded.case.output.vtk_interval,
-                    )
-                })
-                .map_err(|reason| CheckpointError::Mismatch {
-                    path: checkpoint_path.to_path_buf(),
-                    reason,
-                })?;
-            if c.run.body_csv_lengths.len() != free_csv_paths.len() {
-                return Err(RunError::Checkpoint(CheckpointError::Mismatch {
-                    path: checkpoint_path.to_path_buf(),
-                    reason: format!(
-                        "{} free-body series saved, the case has {} free bodies",
-                        c.run.body_csv_lengths.len(),
-                        free_csv_paths.len()
-                    ),
-                }));
-            }
-            for (k, header) in headers.iter().enumerate() {
-                if header.is_some() {
+            for (k, header) in files.headers.iter().enumerate() {
+                if header.is_some() && writer {
                     let path = out.join(checkpoint::SERIES_FILES[k]);
                     outputs.series[k] = Some(Series::reopen(path, c.run.csv_lengths[k])?);
                 }
             }
-            for (path, &len) in free_csv_paths.iter().zip(&c.run.body_csv_lengths) {
-                free_csv.push(Series::reopen(path.clone(), len)?);
+            for (path, &len) in files.free_bodies.iter().zip(&c.run.body_csv_lengths) {
+                if writer {
+                    free_csv.push(Series::reopen(path.clone(), len)?);
+                }
             }
             Ok(RunStart {
                 outputs,
                 free_csv,
                 fluid_body_max: c.run.fluid_body_max,
-                frames: Frames::resume(out, &c.run.frame_times)?,
+                frames: Frames::resume(out, &c.run.frame_times, writer)?,
                 counters: c.run,
                 history: c.history,
                 probe_history: c.probe_history,
@@ -570,26 +585,8 @@ fn start_run<V: CaseDim>(
             })
         }
         None => {
-            write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
-            for (k, header) in headers.iter().enumerate() {
-                if let Some(h) = header {
-                    let path = out.join(checkpoint::SERIES_FILES[k]);
-                    outputs.series[k] = Some(Series::create(path, h)?);
-                }
-            }
-            for path in free_csv_paths {
-                free_csv.push(Series::create(
-                    path.clone(),
-                    &crate::run::outputs::FREE_BODY_COLUMNS.map(String::from),
-                )?);
-            }
-            // A stale checkpoint or report from an earlier run in this folder must not be
-            // mistaken for this run's.
-            for stale in [checkpoint::FILE_NAME, "diagnostics.json"] {
-                let p = out.join(stale);
-                if p.exists() {
-                    at(&p, std::fs::remove_file(&p))?;
-                }
+            if writer {
+                create_series(loaded, out, &mut outputs, &mut free_csv, files)?;
             }
             Ok(RunStart {
                 outputs,
@@ -607,6 +604,90 @@ fn start_run<V: CaseDim>(
             })
         }
     }
+}
+
+/// The files of a fresh run: the copy of the case, the series with their headers; a stale
+/// checkpoint or report of an earlier run in this folder removed, so neither is mistaken for
+/// this run's.
+fn create_series(
+    loaded: &LoadedCase,
+    out: &Path,
+    outputs: &mut Outputs,
+    free_csv: &mut Vec<Series>,
+    files: SeriesFiles,
+) -> Result<(), RunError> {
+    write_atomic(&out.join("case.toml"), loaded.text.as_bytes())?;
+    for (k, header) in files.headers.iter().enumerate() {
+        if let Some(h) = header {
+            let path = out.join(checkpoint::SERIES_FILES[k]);
+            outputs.series[k] = Some(Series::create(path, h)?);
+        }
+    }
+    for path in files.free_bodies {
+        free_csv.push(Series::create(
+            path.clone(),
+            &crate::run::outputs::FREE_BODY_COLUMNS.map(String::from),
+        )?);
+    }
+    for stale in [checkpoint::FILE_NAME, "diagnostics.json"] {
+        let p = out.join(stale);
+        if p.exists() {
+            at(&p, std::fs::remove_file(&p))?;
+        }
+    }
+    Ok(())
+}
+
+/// What a run resumed from a checkpoint continues besides the simulation state: the counters
+/// and the histories of the series.
+struct Resumed {
+    run: RunCounters,
+    history: Vec<[f64; checkpoint::ENERGY_COLUMNS]>,
+    probe_history: Vec<Vec<f64>>,
+}
+
+/// Puts the state of checkpoint `c` (read from `path`) into the whole simulation `sim`, after
+/// checking that it fits the case (its counts, its output intervals, its free bodies).
+fn restore_checkpoint<V: CaseDim>(
+    loaded: &LoadedCase,
+    sim: &mut Simulation<V>,
+    c: Checkpoint<V>,
+    path: &Path,
+) -> Result<Resumed, RunError> {
+    let mismatch = |reason| CheckpointError::Mismatch {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let output = &loaded.case.output;
+    c.sim
+        .restore(sim)
+        .and_then(|_| {
+            c.run
+                .check(sim.time, output.series_interval, output.vtk_interval)
+        })
+        .map_err(mismatch)?;
+    let free_bodies = free_body_names(sim).len();
+    if c.run.body_csv_lengths.len() != free_bodies {
+        return Err(RunError::Checkpoint(mismatch(format!(
+            "{} free-body series saved, the case has {free_bodies} free bodies",
+            c.run.body_csv_lengths.len(),
+        ))));
+    }
+    Ok(Resumed {
+        run: c.run,
+        history: c.history,
+        probe_history: c.probe_history,
+    })
+}
+
+/// The names of the free bodies, in body order.
+fn free_body_names<V: CaseDim>(sim: &Simulation<V>) -> Vec<&str> {
+    sim.walls
+        .bodies
+        .iter()
+        .filter(|b| matches!(b.motion, Motion::Free(_)))
+        .map(|b| b.name.as_str())
+        .collect()
 }
 
 /// Builds the simulation of a fresh run after the memory estimate, and checks its geometry
@@ -627,18 +708,57 @@ pub fn run<V: CaseDim>(
     options: &RunOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<Summary, RunError> {
+    run_split::<V>(loaded, out, options, None, progress)
+}
+
+/// [`run`], split over the parts that `transport` joins when given (every part calls it at
+/// once, each with its end of the transport; see [`Simulation::part_of`]). Every part builds
+/// and settles the whole case, resumes the whole state of a checkpoint, then takes its part.
+/// The outputs are those of the run in one process, to the bit, but for the VTK frames,
+/// written as one piece per part with a `.pvtu` index; the first part writes every other
+/// file, and the checkpoints hold the whole state (a run resumes on any number of parts).
+pub fn run_split<V: CaseDim>(
+    loaded: &LoadedCase,
+    out: &Path,
+    options: &RunOptions,
+    transport: Option<Box<dyn Transport>>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Summary, RunError> {
+    let writer = transport.as_ref().is_none_or(|t| t.rank() == 0);
     let mut sim = build_checked::<V>(loaded)?;
     at(out, std::fs::create_dir_all(out))?;
-    crate::formats::files::remove_stale_temporaries(out);
+    if writer {
+        crate::formats::files::remove_stale_temporaries(out);
+    }
     let checkpoint_path = out.join(checkpoint::FILE_NAME);
     let resumed = match options.resume {
         true => Some(checkpoint::read::<V>(&checkpoint_path)?),
         false => None,
     };
-    let (settling, resumed) = settle_or_recall(loaded, &mut sim, out, resumed, options, progress)?;
-    let mut active = ActiveRun::open(loaded, out, &mut sim, resumed, checkpoint_path)?;
-    let ending = active.advance_to_end(&mut sim, options, progress)?;
-    active.finish(&mut sim, settling, ending)
+    let (settling, resumed) =
+        settle_or_recall(loaded, &mut sim, out, resumed, options, writer, progress)?;
+    let fluid_body0 = fluid_and_body_energy(&sim);
+    let resumed = resumed
+        .map(|c| restore_checkpoint(loaded, &mut sim, c, &checkpoint_path))
+        .transpose()?;
+    if let Some(transport) = transport {
+        sim = Simulation::part_of(&sim, transport);
+    }
+    let start = RunBeginning {
+        resumed,
+        fluid_body0,
+        checkpoint_path,
+    };
+    let ran = ActiveRun::open(loaded, out, &mut sim, start).and_then(|mut active| {
+        let ending = active.advance_to_end(&mut sim, options, progress)?;
+        active.finish(&mut sim, settling, ending)
+    });
+    // Every part meets the same stops, but only the part that met it knows of a file it
+    // could not write.
+    if let Err(RunError::Output(_)) = &ran {
+        sim.abandon_split();
+    }
+    ran
 }
 
 /// Runs a simulation built (and settled) by the caller from its current state to the case's
@@ -662,8 +782,12 @@ pub fn run_built<V: CaseDim>(
         None if settling_path.exists() => at(&settling_path, std::fs::remove_file(&settling_path))?,
         None => {}
     }
-    let checkpoint_path = out.join(checkpoint::FILE_NAME);
-    let mut active = ActiveRun::open(loaded, out, sim, None, checkpoint_path)?;
+    let start = RunBeginning {
+        resumed: None,
+        fluid_body0: fluid_and_body_energy(sim),
+        checkpoint_path: out.join(checkpoint::FILE_NAME),
+    };
+    let mut active = ActiveRun::open(loaded, out, sim, start)?;
     let ending = active.advance_to_end(sim, options, progress)?;
     active.finish(sim, settling, ending)
 }
@@ -686,11 +810,23 @@ fn fluid_and_body_energy<V: CaseDim>(sim: &Simulation<V>) -> f64 {
     e.kinetic + e.compressible + e.potential + k + p
 }
 
+/// How a run begins, besides its simulation: the checkpoint it resumes from (its state
+/// already restored), the fluid and body energy at the start of the run, and where its
+/// checkpoints go.
+struct RunBeginning {
+    resumed: Option<Resumed>,
+    fluid_body0: f64,
+    checkpoint_path: PathBuf,
+}
+
 /// A run between its start and its end: the open outputs, the counters and histories a
 /// checkpoint saves, the last good state the watches fall back to, and the clocks.
 struct ActiveRun<'a, V: CaseDim> {
     loaded: &'a LoadedCase,
     out: &'a Path,
+    /// Whether this process writes the files other than its frame pieces: the only one of a
+    /// whole run, the first of a split run.
+    writer: bool,
     checkpoint_path: PathBuf,
     /// The case file's canonical path, saved in each checkpoint.
     case_source: String,
@@ -722,15 +858,15 @@ struct ActiveRun<'a, V: CaseDim> {
 }
 
 impl<'a, V: CaseDim> ActiveRun<'a, V> {
-    /// Opens the outputs of the run of `loaded` into `out`, fresh or resumed from `resumed`
-    /// (restored into `sim`), and starts the clocks.
+    /// Opens the outputs of the run of `loaded` into `out`, fresh or resumed (`sim` then
+    /// holds the checkpoint's state), and starts the clocks.
     fn open(
         loaded: &'a LoadedCase,
         out: &'a Path,
         sim: &mut Simulation<V>,
-        resumed: Option<Checkpoint<V>>,
-        checkpoint_path: PathBuf,
+        beginning: RunBeginning,
     ) -> Result<Self, RunError> {
+        let writer = sim.rank() == 0;
         let mut probe_header = vec!["t".to_string()];
         probe_header.extend(sim.probes.iter().map(|p| p.name.clone()));
         let midpoint = match sim.config.integrator {
@@ -738,48 +874,34 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             bisph_core::simulation::Integrator::Verlet => None,
         };
         let headers = series_headers(sim, &probe_header);
-        let has_free = sim
-            .walls
-            .bodies
+        let free_bodies: Vec<PathBuf> = free_body_names(sim)
             .iter()
-            .any(|b| matches!(b.motion, Motion::Free(_)));
-        let free_csv_paths: Vec<PathBuf> = sim
-            .walls
-            .bodies
-            .iter()
-            .filter(|b| matches!(b.motion, Motion::Free(_)))
-            .map(|b| out.join(format!("body_{}.csv", b.name)))
+            .map(|name| out.join(format!("body_{name}.csv")))
             .collect();
-        let fluid_body0 = fluid_and_body_energy(sim);
-        let start = start_run(
-            loaded,
-            out,
-            sim,
-            resumed,
-            &checkpoint_path,
-            &headers,
-            &free_csv_paths,
-        )?;
-        let case_source = canonical_source(loaded);
+        let files = SeriesFiles {
+            headers: &headers,
+            free_bodies: &free_bodies,
+        };
+        let start = start_run(loaded, out, sim, beginning.resumed, files, writer)?;
         let watch = Watch::new(loaded.case.diagnostics.clone());
         sim.timings = Default::default();
-        let started = Instant::now();
-        let wall_before = start.counters.wall_seconds;
         let good_counters = start.counters.clone();
         let good_rows = (start.history.len(), start.probe_history.len());
         Ok(ActiveRun {
             loaded,
             out,
-            checkpoint_path,
-            case_source,
+            writer,
+            checkpoint_path: beginning.checkpoint_path,
+            case_source: canonical_source(loaded),
             probe_header,
             midpoint,
-            has_free,
-            fluid_body0,
+            has_free: !free_bodies.is_empty(),
+            fluid_body0: beginning.fluid_body0,
             outputs: start.outputs,
             free_csv: start.free_csv,
             fluid_body_max: start.fluid_body_max,
             frames: start.frames,
+            wall_before: start.counters.wall_seconds,
             counters: start.counters,
             history: start.history,
             probe_history: start.probe_history,
@@ -789,8 +911,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             good_counters,
             good_rows,
             checkpoints: 0,
-            started,
-            wall_before,
+            started: Instant::now(),
             last_checkpoint: Instant::now(),
         })
     }
@@ -832,12 +953,12 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                 return Ok(Ending::Reached);
             }
             self.mark_good(sim);
-            let signalled = options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+            // The parts of a split run stop and checkpoint together, when one of them asks.
+            let signalled = sim.on_any_part(options.stop.is_some_and(|s| s.load(Ordering::SeqCst)));
             let section = &self.loaded.case.checkpoint;
-            if checkpoint_due(section, options, sim.step, self.last_checkpoint, signalled)
-                && Some(sim.step) != self.resumed_from_step
-            {
-                self.write_checkpoint()?;
+            let due = checkpoint_due(section, options, sim.step, self.last_checkpoint, signalled);
+            if sim.on_any_part(due) && Some(sim.step) != self.resumed_from_step {
+                self.write_checkpoint(sim)?;
                 self.checkpoints += 1;
                 self.last_checkpoint = Instant::now();
             }
@@ -962,7 +1083,9 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                     let row = crate::run::outputs::free_body_row::<V>(
                         t, f, centre, loads[b].0, loads[b].1,
                     );
-                    self.free_csv[k].row(&row)?;
+                    if let Some(csv) = self.free_csv.get_mut(k) {
+                        csv.row(&row)?;
+                    }
                     k += 1;
                 }
             }
@@ -1016,12 +1139,25 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         self.good_rows = (self.history.len(), self.probe_history.len());
     }
 
-    /// Writes the last good state with the counters and histories as the checkpoint.
-    fn write_checkpoint(&self) -> Result<(), OutputError> {
+    /// Writes the last good state, which `sim` holds, with the counters and histories as the
+    /// checkpoint: the whole state, gathered from every part of a split run (each must call
+    /// it), written by the first.
+    fn write_checkpoint(&self, sim: &Simulation<V>) -> Result<(), OutputError> {
+        let state = match sim.is_part() {
+            true => {
+                let mut whole = SimState::default();
+                whole.capture_whole(sim);
+                whole
+            }
+            false => self.good.clone(),
+        };
+        if !self.writer {
+            return Ok(());
+        }
         let c = Checkpoint {
             case_source: self.case_source.clone(),
             case_text: self.loaded.text.clone(),
-            sim: self.good.clone(),
+            sim: state,
             run: self.counters.clone(),
             history: self.history.clone(),
             probe_history: self.probe_history.clone(),
@@ -1036,11 +1172,13 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         counters.iterations_sum += sim.last_iterations as u64;
         counters.iterations_max = counters.iterations_max.max(sim.last_iterations);
         counters.residue_max = counters.residue_max.max(sim.last_residue);
-        if let (Some(csv), Some(p)) = (self.outputs.get(MIDPOINT), self.midpoint) {
-            csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
+        if let Some(p) = self.midpoint {
             // With no tolerance (0) every step runs its maximum iterations: none is a failure.
             if p.tolerance > 0.0 && sim.last_residue >= p.tolerance {
-                self.counters.unconverged += 1;
+                counters.unconverged += 1;
+            }
+            if let Some(csv) = self.outputs.get(MIDPOINT) {
+                csv.row(&[sim.time, sim.last_iterations as f64, sim.last_residue])?;
             }
         }
         Ok(())
@@ -1058,15 +1196,17 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         self.history.truncate(self.good_rows.0);
         self.probe_history.truncate(self.good_rows.1);
         self.counters.clone_from(&self.good_counters);
-        self.write_checkpoint()?;
+        self.write_checkpoint(sim)?;
         self.checkpoints += 1;
         self.frames.write(sim)?;
         d.last_good_step = self.good.step;
         d.last_good_time = self.good.time;
         d.checkpoint = Some(checkpoint::FILE_NAME.to_string());
         d.vtk_frame = self.frames.last_fluid_file();
-        let json = serde_json::to_string_pretty(&*d).unwrap_or_default();
-        write_atomic(&self.out.join("diagnostics.json"), json.as_bytes())?;
+        if self.writer {
+            let json = serde_json::to_string_pretty(&*d).unwrap_or_default();
+            write_atomic(&self.out.join("diagnostics.json"), json.as_bytes())?;
+        }
         Ok(())
     }
 
@@ -1082,8 +1222,10 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             self.fall_back(sim, d)?;
         }
         let summary = self.summary(sim, settling, &ending);
-        let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
-        write_atomic(&self.out.join("summary.json"), json.as_bytes())?;
+        if self.writer {
+            let json = serde_json::to_string_pretty(&summary).unwrap_or_default();
+            write_atomic(&self.out.join("summary.json"), json.as_bytes())?;
+        }
         match ending {
             Ending::Tripped(d) => return Err(RunError::Stopped(Box::new(d))),
             Ending::Interrupted => {
@@ -1094,6 +1236,9 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
                 })
             }
             Ending::Reached => {}
+        }
+        if !self.writer {
+            return Ok(summary);
         }
         if self.loaded.case.output.plots {
             write_plots(
@@ -1145,6 +1290,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             residue_max: counters.residue_max,
             unconverged_steps: counters.unconverged,
             threads: rayon::current_num_threads(),
+            ranks: sim.parts(),
             frames: self.frames.count(),
             checkpoints: self.checkpoints,
             resumed_from_step: self.resumed_from_step,
