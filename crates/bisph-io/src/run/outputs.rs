@@ -124,6 +124,7 @@ impl Frames {
         let path = self.dir.join(&piece);
         at(&path, write_points_vtu(&path, &points, &arrays))?;
         if sim.rank() == 0 {
+            self.remove_stale(k, sim.is_part().then_some(sim.parts()))?;
             if sim.is_part() {
                 // The pieces lie next to their index.
                 let pieces: Vec<String> = (0..sim.parts())
@@ -139,6 +140,23 @@ impl Frames {
             0 => self.write_indices(),
             _ => Ok(()),
         }
+    }
+
+    /// Removes what an earlier invocation of a resumed run wrote for frame `k` that this one
+    /// does not overwrite: the file of the other kind (`.vtu` or `.pvtu`), and the pieces of
+    /// parts it does not have (`split`: the number of parts of this run).
+    fn remove_stale(&self, k: usize, split: Option<usize>) -> Result<(), OutputError> {
+        let mut stale = vec![self.dir.join(fluid_file(k, split.is_none()))];
+        let first = split.unwrap_or(0);
+        stale.extend(
+            (first..)
+                .map(|r| self.dir.join(piece_file(k, r)))
+                .take_while(|p| p.exists()),
+        );
+        for path in stale.into_iter().filter(|p| p.exists()) {
+            at(&path, std::fs::remove_file(&path))?;
+        }
+        Ok(())
     }
 
     /// The walls of frame `k`.
