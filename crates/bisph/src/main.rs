@@ -128,36 +128,41 @@ const EXIT_INTERRUPTED: u8 = 10;
 /// (checkpoint written), 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
-        // A run, or one bench configuration, splits over the ranks of a parallel launch.
-        Some(Command::Bench(args)) if args.is_single() => bench::bench(args),
+    let result = unsplit_in_one_process(&cli.command).and_then(|()| match cli.command {
         None => run(RunArgs {
             progress_interval: progress::DEFAULT_INTERVAL,
             ..RunArgs::default()
         }),
         Some(Command::Run(args)) => run(args),
-        command => launch::one_process().and_then(|()| match command {
-            None | Some(Command::Run(_)) => unreachable!("runs are split above"),
-            Some(Command::Bench(args)) => bench::bench(args),
-            Some(Command::Validate(args)) => validate(args),
-            Some(Command::Shepard(args)) => shepard(args),
-            Some(Command::Pack(args)) => pack(args),
-        }),
-    };
+        Some(Command::Bench(args)) => bench::bench(args),
+        Some(Command::Validate(args)) => validate(args),
+        Some(Command::Shepard(args)) => shepard(args),
+        Some(Command::Pack(args)) => pack(args),
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A rank of a split run other than the first: the first reports.
+        Err((code, message)) if message.is_empty() => ExitCode::from(code),
         // An interrupt is what the user asked for, not an error: its line says where the
         // checkpoint is and how to continue.
         Err((EXIT_INTERRUPTED, message)) => {
             eprintln!("{message}");
             ExitCode::from(EXIT_INTERRUPTED)
         }
-        // A rank of a split run other than the first: the first reports.
-        Err((code, message)) if message.is_empty() => ExitCode::from(code),
         Err((code, message)) => {
             eprintln!("error: {message}");
             ExitCode::from(code)
         }
+    }
+}
+
+/// Refuses a start as one of several processes of a parallel launch, unless the command
+/// splits its case over them: a run, or one bench configuration.
+fn unsplit_in_one_process(command: &Option<Command>) -> Result<(), (u8, String)> {
+    match command {
+        None | Some(Command::Run(_)) => Ok(()),
+        Some(Command::Bench(args)) if args.is_single() => Ok(()),
+        Some(_) => launch::one_process(),
     }
 }
 
