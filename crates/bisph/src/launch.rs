@@ -20,6 +20,27 @@ fn several_processes() -> Option<(&'static str, String)> {
     })
 }
 
+/// Where Open MPI, MPICH and Slurm give the number of processes of a launch on this machine.
+const LOCAL_SIZE_VARIABLES: [&str; 3] = [
+    "OMPI_COMM_WORLD_LOCAL_SIZE",
+    "MPI_LOCALNRANKS",
+    "SLURM_NTASKS_PER_NODE",
+];
+
+/// The threads each process of a launch takes when `--threads` is not given: the cores it
+/// may run on shared by the processes the launch started on this machine, at least one
+/// (`None`: a start as one process, which takes every core it may run on). A process bound
+/// to one core sees that core alone; unbound processes would otherwise each take every core
+/// and slow one another several times over.
+pub fn threads_per_rank() -> Option<usize> {
+    let local = LOCAL_SIZE_VARIABLES.iter().find_map(|&name| {
+        let n = std::env::var(name).ok()?.trim().parse::<usize>().ok()?;
+        (n > 1).then_some(n)
+    })?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Some((cores / local).max(1))
+}
+
 /// Refuses a start as one of several processes: each would run the whole case and write the
 /// same outputs.
 pub fn one_process() -> Result<(), (u8, String)> {

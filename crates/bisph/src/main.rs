@@ -94,7 +94,8 @@ struct RunArgs {
     /// Override a case key, e.g. --set resolution.dx=0.01 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
-    /// Number of threads (default: all cores).
+    /// Number of threads (default: all cores; under a parallel launch, each process takes
+    /// its share of the cores it may run on).
     #[arg(long)]
     threads: Option<usize>,
     /// No progress output.
@@ -181,7 +182,7 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
 }
 
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
-    set_threads(args.threads)?;
+    set_threads(args.threads.or_else(launch::threads_per_rank))?;
     let (loaded, out) = match &args.resume {
         Some(dir) => {
             nothing_to_resume(dir)?;

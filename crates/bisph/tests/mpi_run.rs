@@ -1,8 +1,9 @@
 //! `mpirun -np K bisph run` writes the series of `bisph run` in one process, to the byte
 //! (`energy.csv`, `forces.csv`, `probes.csv`, `bodies.csv`, `body_<name>.csv`, `midpoint.csv`),
 //! for K = 2 to 4 (oversubscribed where the machine has fewer cores) and four cases, with the
-//! fluid of each frame in K pieces; a split run killed after a checkpoint and resumed on another number of
-//! ranks ends with the same series. Needs the `mpi` feature and Open MPI's `mpirun`.
+//! fluid of each frame in K pieces; a split run killed after a checkpoint and resumed on
+//! another number of ranks ends with the same series; unbound ranks without `--threads` share
+//! the cores. Needs the `mpi` feature and Open MPI's `mpirun`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -196,6 +197,29 @@ fn a_run_split_over_ranks_writes_the_series_of_one_process() {
             }
         }
     }
+}
+
+/// Unbound ranks share the cores: without `--threads`, each takes its share.
+#[test]
+fn unbound_ranks_share_the_cores() {
+    let path = case("dam-break-2d.toml");
+    let dir = folder("unbound");
+    let out = dir.display().to_string();
+    let o = Command::new("mpirun")
+        .args(["-np", "2", "--oversubscribe", "--bind-to", "none"])
+        .arg(env!("CARGO_BIN_EXE_bisph"))
+        .args(["run", &path, "--out", &out, "--quiet"])
+        .args(["--set", "time.end=0.01", "--set", "output.vtk_interval=0"])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .output()
+        .unwrap_or_else(|e| panic!("mpirun could not be started ({e}): install Open MPI"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    assert_eq!(summary["threads"], (cores / 2).max(1));
+    assert_eq!(summary["ranks"], 2);
 }
 
 #[test]
