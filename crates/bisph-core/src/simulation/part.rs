@@ -171,9 +171,19 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
-    /// `true` when `value` holds on at least one part (every part must call it).
-    pub fn on_any_part(&self, value: bool) -> bool {
-        !self.on_all_parts(!value)
+    /// Each of `flags` set where it is set on at least one part, in one exchange (every part
+    /// must call it).
+    pub fn on_any_part<const N: usize>(&self, flags: [bool; N]) -> [bool; N] {
+        let Some(part) = &self.part else {
+            return flags;
+        };
+        let mut any = [false; N];
+        for message in all_gather(&part.transport, flags.map(u64::from).to_vec()) {
+            for (a, &word) in any.iter_mut().zip(&message) {
+                *a |= word == 1;
+            }
+        }
+        any
     }
 
     /// Number of times the regions of a split run were cut again since it was split (0 for a

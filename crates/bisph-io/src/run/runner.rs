@@ -954,10 +954,11 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             }
             self.mark_good(sim);
             // The parts of a split run stop and checkpoint together, when one of them asks.
-            let signalled = sim.on_any_part(options.stop.is_some_and(|s| s.load(Ordering::SeqCst)));
+            let signalled = options.stop.is_some_and(|s| s.load(Ordering::SeqCst));
             let section = &self.loaded.case.checkpoint;
             let due = checkpoint_due(section, options, sim.step, self.last_checkpoint, signalled);
-            if sim.on_any_part(due) && Some(sim.step) != self.resumed_from_step {
+            let [signalled, due] = sim.on_any_part([signalled, due]);
+            if due && Some(sim.step) != self.resumed_from_step {
                 self.write_checkpoint(sim)?;
                 self.checkpoints += 1;
                 self.last_checkpoint = Instant::now();
