@@ -8,16 +8,17 @@ use bisph_core::decomposition::Transport;
 /// of processes they started.
 const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE"];
 
-/// The variable and the number of processes of a launch that started more than one.
-fn several_processes() -> Option<(&'static str, String)> {
-    SIZE_VARIABLES.iter().find_map(|&name| {
-        let value = std::env::var(name).ok()?;
-        let count = value.trim().to_string();
-        count
-            .parse::<u64>()
-            .is_ok_and(|n| n > 1)
-            .then_some((name, count))
+/// The first of `variables` that holds a count above one, with that count.
+fn count_above_one(variables: &[&'static str]) -> Option<(&'static str, usize)> {
+    variables.iter().find_map(|&name| {
+        let n = std::env::var(name).ok()?.trim().parse::<usize>().ok()?;
+        (n > 1).then_some((name, n))
     })
+}
+
+/// The variable and the number of processes of a launch that started more than one.
+fn several_processes() -> Option<(&'static str, usize)> {
+    count_above_one(&SIZE_VARIABLES)
 }
 
 /// Where Open MPI, MPICH and Slurm give the number of processes of a launch on this machine.
@@ -33,10 +34,7 @@ const LOCAL_SIZE_VARIABLES: [&str; 3] = [
 /// to one core sees that core alone; unbound processes would otherwise each take every core
 /// and slow one another several times over.
 pub fn threads_per_rank() -> Option<usize> {
-    let local = LOCAL_SIZE_VARIABLES.iter().find_map(|&name| {
-        let n = std::env::var(name).ok()?.trim().parse::<usize>().ok()?;
-        (n > 1).then_some(n)
-    })?;
+    let (_, local) = count_above_one(&LOCAL_SIZE_VARIABLES)?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     Some((cores / local).max(1))
 }
@@ -64,11 +62,11 @@ pub fn rank_transport() -> Result<Option<Box<dyn Transport>>, (u8, String)> {
     let Some((name, count)) = several_processes() else {
         return Ok(None);
     };
-    mpi_transport(name, &count).map(Some)
+    mpi_transport(name, count).map(Some)
 }
 
 #[cfg(feature = "mpi")]
-fn mpi_transport(_: &str, _: &str) -> Result<Box<dyn Transport>, (u8, String)> {
+fn mpi_transport(_: &str, _: usize) -> Result<Box<dyn Transport>, (u8, String)> {
     match bisph_core::decomposition::MpiTransport::initialise() {
         Some(transport) => Ok(Box::new(transport)),
         None => Err((1, "MPI could not be initialised".into())),
@@ -76,7 +74,7 @@ fn mpi_transport(_: &str, _: &str) -> Result<Box<dyn Transport>, (u8, String)> {
 }
 
 #[cfg(not(feature = "mpi"))]
-fn mpi_transport(name: &str, count: &str) -> Result<Box<dyn Transport>, (u8, String)> {
+fn mpi_transport(name: &str, count: usize) -> Result<Box<dyn Transport>, (u8, String)> {
     Err((
         1,
         format!(
