@@ -26,8 +26,11 @@ pub struct EnergyBudget {
     /// Cumulative compressible energy removed by the density diffusion,
     /// `int sum_i -m_i p_i D_i / rho_i^2 dt` (zero without diffusion).
     pub diffusion_dissipation: f64,
+    /// Cumulative energy (kinetic, compressible and potential) of the particles removed as
+    /// they left the domain (zero while none has).
+    pub removed: f64,
     /// `kinetic + compressible + potential + wall_work + viscous_dissipation
-    /// + diffusion_dissipation - forcing_work`.
+    /// + diffusion_dissipation + removed - forcing_work`.
     pub total: f64,
 }
 
@@ -52,6 +55,14 @@ pub fn exact_partial_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> ExactSum 
             a.merge(&b);
             a
         })
+}
+
+/// The kinetic, compressible and potential energy of particle `i`,
+/// `m_i (|u_i|^2 / 2 + e(rho_i) - g . r_i)`: the terms of [`fluid_energy_sums`].
+pub fn particle_energy<V: Vector>(fluid: &Fluid<V>, i: usize, eos: &Eos, gravity: V) -> f64 {
+    let m = fluid.mass[i];
+    0.5 * m * fluid.velocity[i].length_squared() + m * eos.specific_energy(fluid.density[i])
+        - m * gravity.dot(fluid.position[i])
 }
 
 /// The fluid's kinetic, compressible and potential energies.

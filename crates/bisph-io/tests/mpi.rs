@@ -14,7 +14,7 @@ use bisph_core::dim::Vector;
 use bisph_core::Simulation;
 use bisph_io::case::CaseDim;
 use glam::{DVec2, DVec3};
-use split_runs::{advance, built, SplitCase, SPLIT_CASES};
+use split_runs::{advance, SplitCase, SPLIT_CASES};
 use std::path::Path;
 use std::process::Command;
 
@@ -46,7 +46,7 @@ fn run_rank(case: &SplitCase) {
 
 /// This rank's run of `case`; the trace on rank 0.
 fn part_trace<V: CaseDim>(case: &SplitCase, transport: MpiTransport) -> Option<Vec<String>> {
-    let whole = built::<V>(case.name, case.overrides);
+    let whole = case.build::<V>();
     let mut part = Simulation::part_of(&whole, Box::new(transport));
     drop(whole);
     let trace = advance(&mut part, case.steps);
@@ -54,7 +54,7 @@ fn part_trace<V: CaseDim>(case: &SplitCase, transport: MpiTransport) -> Option<V
 }
 
 fn whole_trace<V: Vector + CaseDim>(case: &SplitCase) -> Vec<String> {
-    let mut whole = built::<V>(case.name, case.overrides);
+    let mut whole = case.build::<V>();
     advance(&mut whole, case.steps).lines()
 }
 

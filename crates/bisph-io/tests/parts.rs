@@ -12,7 +12,7 @@ use bisph_core::dim::Vector;
 use bisph_core::Simulation;
 use bisph_io::case::CaseDim;
 use bisph_io::run::checkpoint::SimState;
-use split_runs::{advance, built, SplitCase, Trace, SPLIT_CASES};
+use split_runs::{advance, SplitCase, Trace, SPLIT_CASES};
 
 /// What one split run did besides its trace: particles handed between parts and halo
 /// particles held at the end, summed over the parts, and the times the regions were cut
@@ -83,9 +83,9 @@ fn assert_same(trace: &Trace, expected: &Trace, run: &str) {
 /// particles handed between parts and the times the regions were cut again, for each split
 /// run.
 fn check<V: CaseDim>(case: &SplitCase) -> Vec<(u64, u64)> {
-    let mut whole = built::<V>(case.name, case.overrides);
+    let mut whole = case.build::<V>();
     let expected = advance(&mut whole, case.steps);
-    let start = built::<V>(case.name, case.overrides);
+    let start = case.build::<V>();
     let mut departed = Vec::new();
     for parts in 1..=4 {
         let (trace, traffic) = split_run(&start, parts, case.steps);
@@ -131,6 +131,7 @@ fn a_free_floating_body() {
 fn periodic_flow_with_flux_forcing() {
     check::<glam::DVec2>(&SplitCase {
         name: "poiseuille-flux.toml",
+        text: None,
         overrides: &["resolution.dx=0.025", "time.dt=2.5e-4"],
         steps: 50,
         three_d: false,
@@ -141,6 +142,7 @@ fn periodic_flow_with_flux_forcing() {
 fn semi_analytical_walls() {
     check::<glam::DVec2>(&SplitCase {
         name: "usaw-still-water.toml",
+        text: None,
         overrides: &[],
         steps: 20,
         three_d: false,
@@ -150,12 +152,12 @@ fn semi_analytical_walls() {
 /// A whole run's state, restored and split into 1 to 4 parts, continues with the bits of the
 /// uninterrupted run: the checkpoint of a whole run resumes on any number of parts.
 fn check_resumed<V: CaseDim>(case: &SplitCase, before: usize) {
-    let mut whole = built::<V>(case.name, case.overrides);
+    let mut whole = case.build::<V>();
     advance(&mut whole, before);
     let mut state = SimState::default();
     state.capture(&whole);
     let expected = advance(&mut whole, case.steps);
-    let mut restored = built::<V>(case.name, case.overrides);
+    let mut restored = case.build::<V>();
     state.restore(&mut restored).unwrap();
     assert!(
         restored.neighbour_list_origin().is_some(),
@@ -165,6 +167,28 @@ fn check_resumed<V: CaseDim>(case: &SplitCase, before: usize) {
         let (trace, _) = split_run(&restored, parts, case.steps);
         assert_same(&trace, &expected, &format!("resumed on {parts} parts"));
     }
+}
+
+#[test]
+fn particles_leaving_the_domain_are_removed_alike_on_any_number_of_parts() {
+    let case = &SPLIT_CASES[4];
+    let mut whole = case.build::<glam::DVec2>();
+    advance(&mut whole, case.steps);
+    assert_eq!(whole.removed, 80);
+    check::<glam::DVec2>(case);
+}
+
+#[test]
+fn a_run_that_lost_particles_resumes_on_any_number_of_parts() {
+    // Two rows (40 particles) have left by step 300, two more by step 340.
+    let case = SplitCase {
+        steps: 40,
+        ..SPLIT_CASES[4]
+    };
+    let mut whole = case.build::<glam::DVec2>();
+    advance(&mut whole, 300);
+    assert_eq!(whole.removed, 40);
+    check_resumed::<glam::DVec2>(&case, 300);
 }
 
 #[test]
@@ -192,10 +216,10 @@ fn a_floating_body_resumed_on_any_number_of_parts() {
 fn a_split_run_gathered_continues_whole() {
     let case = &SPLIT_CASES[0];
     let (before, after) = (500, 400);
-    let mut whole = built::<glam::DVec2>(case.name, case.overrides);
+    let mut whole = case.build::<glam::DVec2>();
     advance(&mut whole, before);
     let expected = advance(&mut whole, after);
-    let start = built::<glam::DVec2>(case.name, case.overrides);
+    let start = case.build::<glam::DVec2>();
     for parts in [2, 3] {
         let states = on_parts(&start, parts, |part| {
             advance(part, before);
@@ -204,7 +228,7 @@ fn a_split_run_gathered_continues_whole() {
             state
         });
         for state in &states {
-            let mut resumed = built::<glam::DVec2>(case.name, case.overrides);
+            let mut resumed = case.build::<glam::DVec2>();
             state.restore(&mut resumed).unwrap();
             assert!(resumed.neighbour_list_origin().is_some(), "with its list");
             let trace = advance(&mut resumed, after);

@@ -204,6 +204,14 @@ impl Simulation {
         }
     }
 
+    /// Particle ids, shape (n,), uint32, increasing: the rows of the particle arrays (ids
+    /// count from 0 in the order the case's blocks created the particles; the ids of
+    /// particles removed as they left the domain are missing).
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        PyArray1::from_vec(py, self.solver.particle_ids())
+    }
+
     /// Particle positions r_i [m], shape (n, dim), float64; a copy in particle-id order.
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
@@ -297,7 +305,8 @@ impl Simulation {
     /// The energy budget now [J; J/m in 2-D], the columns of `energy.csv`: `kinetic`,
     /// `compressible` (sum m e(rho)), `potential` (-sum m g . r), `wall_work`
     /// (int sum F_j . U_j dt, paper 1), `viscous_dissipation`, `forcing_work`, `diffusion_dissipation`
-    /// (the compressible energy the density diffusion removed) and `total`.
+    /// (the compressible energy the density diffusion removed), `removed` (the energy of the
+    /// particles removed as they left the domain) and `total`.
     #[getter]
     fn energy<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let e = self.solver.energy();
@@ -310,6 +319,7 @@ impl Simulation {
         d.set_item("viscous_dissipation", e.viscous_dissipation)?;
         d.set_item("forcing_work", e.forcing_work)?;
         d.set_item("diffusion_dissipation", e.diffusion_dissipation)?;
+        d.set_item("removed", e.removed)?;
         Ok(d)
     }
 

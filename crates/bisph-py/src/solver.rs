@@ -103,6 +103,8 @@ pub trait Solver: Send + Sync {
     /// A particle quantity in particle-id order (the order of the case's blocks), flattened
     /// row by row, with its number of components.
     fn particle_field(&self, field: ParticleField) -> (Vec<f64>, usize);
+    /// The particle ids in increasing order: the rows of [`Solver::particle_field`].
+    fn particle_ids(&self) -> Vec<u32>;
     /// An element quantity as the simulation stores it, with its number of components.
     fn element_field(&self, field: ElementField) -> (&[f64], usize);
     /// The owning body of each element.
@@ -127,17 +129,19 @@ fn components<V: CaseDim>(values: &[V]) -> &[f64] {
     unsafe { std::slice::from_raw_parts(values.as_ptr().cast::<f64>(), values.len() * V::DIM) }
 }
 
-/// `values` (one entry per particle, in memory order) in particle-id order, flattened.
+/// `values` (one entry per particle, in memory order) in increasing particle id, flattened
+/// (the ids of particles removed as they left the domain are skipped).
 fn by_id<T: Copy>(
     ids: &[u32],
     values: &[T],
     cols: usize,
     flat: impl Fn(T, &mut [f64]),
 ) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..ids.len()).collect();
+    order.sort_unstable_by_key(|&i| ids[i]);
     let mut out = vec![0.0; values.len() * cols];
-    for (&id, &v) in ids.iter().zip(values) {
-        let k = id as usize * cols;
-        flat(v, &mut out[k..k + cols]);
+    for (row, i) in out.chunks_exact_mut(cols).zip(order) {
+        flat(values[i], row);
     }
     out
 }
@@ -230,6 +234,12 @@ impl<V: CaseDim> Solver for Simulation<V> {
             ParticleField::Mass => (scalar(&f.mass), 1),
             ParticleField::Gamma => (scalar(&f.gamma), 1),
         }
+    }
+
+    fn particle_ids(&self) -> Vec<u32> {
+        let mut ids = self.fluid.id.clone();
+        ids.sort_unstable();
+        ids
     }
 
     fn element_field(&self, field: ElementField) -> (&[f64], usize) {

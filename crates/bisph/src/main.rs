@@ -255,6 +255,13 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
                 s.energy_drift_relative,
                 out.display()
             );
+            if s.removed_particles > 0 {
+                println!(
+                    "{} fluid particles ({:.2}%) left the domain and were removed; their energy is the `removed` column of energy.csv",
+                    s.removed_particles,
+                    100.0 * s.removed_particles as f64 / s.fluid_particles.max(1) as f64
+                );
+            }
             if let Some(settling) = &s.settling {
                 println!(
                     "settling before t = 0: {} after {:.3} s ({} steps, {:.1} s wall), residual speed {:.2e} sqrt(g H)",

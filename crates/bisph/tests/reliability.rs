@@ -301,3 +301,59 @@ fn unwritable_output_names_the_file() {
     assert_eq!(out.status.code(), Some(4), "{stderr}");
     assert!(stderr.contains("energy.csv"), "{stderr}");
 }
+
+/// The water thrown up out of the open tank leaves the domain: its particles are removed, with
+/// their energy booked in `energy.csv`, up to `diagnostics.removed_fraction_max` of the fluid
+/// (default 1%); one more stops the run with exit code 21, naming the count.
+#[test]
+fn particles_leaving_the_domain_are_removed_up_to_the_allowance() {
+    let splash = [
+        "--set",
+        "wall.0.open=[\"+y\"]",
+        "--set",
+        "fluid_block.0.velocity=[0.0, 4.0]",
+        "--set",
+        "time.end=0.25",
+    ];
+    let dir = temp_dir("leaving");
+    let mut args = splash.to_vec();
+    args.extend(["--set", "diagnostics.removed_fraction_max=0.5"]);
+    let out = dam_break(&dir, &args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary = json(&dir.join("summary.json"));
+    let removed = summary["removed_particles"].as_u64().unwrap();
+    assert_eq!(summary["fluid_particles"].as_u64(), Some(450));
+    assert!((10..=225).contains(&removed), "{removed} removed");
+    assert!(
+        stdout.contains(&format!("{removed} fluid particles")) && stdout.contains("were removed"),
+        "{stdout}"
+    );
+    let energy = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
+    let mut rows = energy.lines();
+    assert!(rows.next().unwrap().ends_with(",removed"));
+    let last: Vec<f64> = rows
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(last[9] > 0.0, "removed energy {}", last[9]);
+
+    let dir = temp_dir("left");
+    let out = dam_break(&dir, &splash);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(21), "{stderr}");
+    assert!(
+        stderr.contains("4 particles left it before and were removed, at most 4 may"),
+        "{stderr}"
+    );
+    let d = json(&dir.join("diagnostics.json"));
+    assert_eq!(d["exit_code"].as_u64(), Some(21));
+    let summary = json(&dir.join("summary.json"));
+    assert_eq!(summary["removed_particles"].as_u64(), Some(4));
+}

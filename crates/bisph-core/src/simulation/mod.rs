@@ -2,6 +2,7 @@
 //! integrators: explicit velocity Verlet ([`verlet`]) or the semi-implicit midpoint scheme
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
+mod leaving;
 mod midpoint;
 mod part;
 mod part_state;
@@ -101,10 +102,14 @@ pub struct SimConfig<V: Vector> {
     pub fixed_dt: Option<f64>,
     /// Smallest allowed time step (the run stops below it).
     pub min_dt: f64,
-    /// Lower corner of the domain; a particle outside stops the run.
+    /// Lower corner of the domain; a particle outside it is removed, or stops the run
+    /// ([`SimConfig::max_removed`]).
     pub domain_min: V,
     /// Upper corner of the domain.
     pub domain_max: V,
+    /// Most particles the run may lose through the domain's bounds: each is removed as it
+    /// leaves ([`Simulation::removed`]), and one more stops the run (0: the first stops it).
+    pub max_removed: u64,
     /// Wall model.
     pub wall_model: WallModelChoice,
     /// Time integrator.
@@ -227,6 +232,11 @@ pub struct Simulation<V: Vector> {
     pub diffusion_power: f64,
     /// Cumulative work of the driving force, `int F . sum_i m_i u_i dt`.
     pub forcing_work: f64,
+    /// Particles removed so far as they left the domain (over every part).
+    pub removed: u64,
+    /// Cumulative energy of the removed particles, `sum m (|u|^2 / 2 + e(rho) - g . r)` at
+    /// their removal.
+    pub removed_energy: f64,
     /// Current driving acceleration (zero without flux control).
     pub body_force: V,
     /// The flux controller's memory (bulk velocities and last force).
@@ -290,6 +300,8 @@ impl<V: Vector> Simulation<V> {
             diffusion_dissipation: 0.0,
             diffusion_power: 0.0,
             forcing_work: 0.0,
+            removed: 0,
+            removed_energy: 0.0,
             body_force: V::ZERO,
             flux_history: FluxHistory::default(),
             last_iterations: 0,
@@ -370,6 +382,8 @@ impl<V: Vector> Simulation<V> {
             diffusion_dissipation: whole.diffusion_dissipation,
             diffusion_power: whole.diffusion_power,
             forcing_work: whole.forcing_work,
+            removed: whole.removed,
+            removed_energy: whole.removed_energy,
             body_force: whole.body_force,
             flux_history: whole.flux_history,
             last_iterations: whole.last_iterations,
@@ -1050,10 +1064,14 @@ impl<V: Vector> Simulation<V> {
         self.check_state()
     }
 
-    /// Stops on the particle with the lowest id, over every part, whose state is not finite
-    /// or which left the domain.
-    fn check_state(&self) -> Result<(), SimError> {
-        let bad = self.first_bad_over_parts(self.first_bad_particle());
+    /// Removes the particles that left the domain while the run may still lose them
+    /// ([`Simulation::remove_leaving`]), then stops on the particle with the lowest id, over
+    /// every part, whose state is not finite or which left the domain.
+    fn check_state(&mut self) -> Result<(), SimError> {
+        let mut bad = self.first_bad_over_parts(self.first_bad_particle());
+        if bad.is_some_and(|b| b.fault() == Fault::Outside) && self.remove_leaving() {
+            bad = self.first_bad_over_parts(self.first_bad_particle());
+        }
         match bad {
             Some(bad) => Err(bad.error(self.step, self.time)),
             None => Ok(()),
@@ -1064,7 +1082,6 @@ impl<V: Vector> Simulation<V> {
     /// lowest id.
     fn first_bad_particle(&self) -> Option<BadParticle> {
         let f = &self.fluid;
-        let (lo, hi) = (self.config.domain_min, self.config.domain_max);
         let bad = |i: usize| {
             let r = f.position[i];
             let fault = if !r.is_finite() {
@@ -1073,7 +1090,7 @@ impl<V: Vector> Simulation<V> {
                 Fault::Velocity
             } else if !(f.density[i].is_finite() && f.density[i] > 0.0) {
                 Fault::Density
-            } else if (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k))) {
+            } else if self.outside_domain(r) {
                 Fault::Outside
             } else {
                 return None;
@@ -1111,12 +1128,14 @@ impl<V: Vector> Simulation<V> {
             viscous_dissipation: self.viscous_dissipation,
             forcing_work: self.forcing_work,
             diffusion_dissipation: self.diffusion_dissipation,
+            removed: self.removed_energy,
             total: kinetic
                 + compressible
                 + potential
                 + self.wall_work
                 + self.viscous_dissipation
                 + self.diffusion_dissipation
+                + self.removed_energy
                 - self.forcing_work,
         }
     }

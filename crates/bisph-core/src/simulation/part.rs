@@ -74,7 +74,9 @@ impl<V: Vector> Simulation<V> {
         part.select_halo();
         // The Verlet list of the whole, over this part's particles (the halo's included).
         let origin = whole.neighbour_list_origin().map(|origin| {
-            let mut at_id = vec![V::ZERO; origin.len()];
+            // Indexed by id (with gaps where particles left the domain).
+            let slots = f.id.iter().max().map_or(0, |&m| m as usize + 1);
+            let mut at_id = vec![V::ZERO; slots];
             for (&id, &o) in f.id.iter().zip(origin) {
                 at_id[id as usize] = o;
             }

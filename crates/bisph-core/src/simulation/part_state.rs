@@ -104,6 +104,10 @@ impl BadParticle {
         self.id
     }
 
+    pub(crate) fn fault(&self) -> Fault {
+        self.fault
+    }
+
     pub(super) fn to_words(self) -> Message {
         let mut words = vec![u64::from(self.id), self.fault as u64];
         words.extend(self.position.map(f64::to_bits));

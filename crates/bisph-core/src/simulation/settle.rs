@@ -153,9 +153,10 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Positions indexed by particle id.
+/// Positions indexed by particle id (ids of removed particles hold zero).
 fn positions_by_id<V: Vector>(fluid: &Fluid<V>) -> Vec<V> {
-    let mut by_id = vec![V::ZERO; fluid.len()];
+    let slots = fluid.id.iter().max().map_or(0, |&m| m as usize + 1);
+    let mut by_id = vec![V::ZERO; slots];
     for (i, &id) in fluid.id.iter().enumerate() {
         by_id[id as usize] = fluid.position[i];
     }

@@ -87,6 +87,7 @@ pub fn build_simulation_with_layout<V: CaseDim>(
         min_dt: case.time.min_dt.unwrap_or(1e-6 * h / eos.c0()),
         domain_min,
         domain_max,
+        max_removed: max_removed(case, fluid.len()),
         wall_model: wall_model_of(case),
         diffusion: diffusion_of(case),
         particle_spacing: case.resolution.dx,
@@ -409,6 +410,13 @@ fn push_block<V: CaseDim>(
         fluid.push(r, velocity, rho, mass, p);
     }
     Ok(())
+}
+
+/// Most particles the run may lose through the domain's bounds: `diagnostics.removed_fraction_max`
+/// of the `n` initial ones, all but one at most (the last always stops the run).
+fn max_removed(case: &Case, n: usize) -> u64 {
+    let allowed = (case.diagnostics.removed_fraction_max * n as f64).floor() as u64;
+    allowed.min(n.saturating_sub(1) as u64)
 }
 
 /// The domain's corners: `[domain]`, or the box around the fluid and the walls with a margin

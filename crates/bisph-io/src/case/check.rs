@@ -655,6 +655,15 @@ fn check_reliability(loaded: &LoadedCase) -> Result<(), CaseError> {
             ),
         );
     }
+    if !(0.0..=1.0).contains(&g.removed_fraction_max) {
+        return e(
+            "diagnostics.removed_fraction_max",
+            format!(
+                "expected a fraction in [0, 1] (0 = stop at the first particle leaving the domain), found {}",
+                g.removed_fraction_max
+            ),
+        );
+    }
     if let Some(dt) = c.time.min_dt {
         if dt >= c.time.end {
             return e(

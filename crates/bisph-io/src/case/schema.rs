@@ -554,6 +554,10 @@ pub struct DiagnosticsSection {
     /// Largest allowed growth of the total energy over `E_scale` (0 = off).
     #[serde(default = "default_energy_growth")]
     pub energy_growth: f64,
+    /// Most particles, as a fraction of the initial fluid, that may leave the domain (each
+    /// removed as it leaves); one more stops the run (0: the first stops it).
+    #[serde(default = "default_removed_fraction_max")]
+    pub removed_fraction_max: f64,
 }
 
 fn default_density_ratio_min() -> f64 {
@@ -568,6 +572,9 @@ fn default_dt_collapse() -> f64 {
 fn default_energy_growth() -> f64 {
     0.5
 }
+fn default_removed_fraction_max() -> f64 {
+    0.01
+}
 
 impl Default for DiagnosticsSection {
     fn default() -> Self {
@@ -579,6 +586,7 @@ impl Default for DiagnosticsSection {
             dt_collapse: default_dt_collapse(),
             wall_crossing: true,
             energy_growth: default_energy_growth(),
+            removed_fraction_max: default_removed_fraction_max(),
         }
     }
 }

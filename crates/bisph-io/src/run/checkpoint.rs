@@ -22,10 +22,10 @@
 //! scheme extrapolates its first guess, and which Verlet uses as its first kick), the
 //! positions the explicit scheme's Verlet list was built at (so the same list is rebuilt and
 //! kept for the same steps), the energy accumulators (wall work, viscous dissipation, forcing
-//! work), the flux controller's memory and driving force, and the run loop's counters (next
-//! output times, frames, CSV lengths, free bodies' CSV lengths, plot histories); a checkpoint
-//! taken while settling before `t = 0` saves the settling report instead of the run's
-//! counters. The static parts (reference geometry, configuration; masses are saved too) are
+//! work, the energy of the particles removed as they left the domain, and their count), the
+//! flux controller's memory and driving force, and the run loop's counters (next output
+//! times, frames, CSV lengths, free bodies' CSV lengths, plot histories); a checkpoint taken
+//! while settling before `t = 0` saves the settling report instead of the run's counters. The static parts (reference geometry, configuration; masses are saved too) are
 //! rebuilt from the case text stored in the checkpoint.
 
 use crate::formats::files::OutputError;
@@ -40,18 +40,20 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (8: the density diffusion's energy books, a ninth energy column; 7: a settling stage
+/// (9: the particles removed as they left the domain and their energy, a tenth energy
+/// column; 8: the density diffusion's energy books, a ninth energy column; 7: a settling stage
 /// part-way; 6: the positions the explicit scheme's Verlet list was
 /// built at; 5: the midpoint first
 /// guess's earlier rates and step; 4: free rigid bodies and their CSV lengths; 3: without
 /// them).
-pub const FORMAT_VERSION: u32 = 8;
+pub const FORMAT_VERSION: u32 = 9;
 /// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
 /// by it resumes with the first guess of a fresh start (last rates) for its first two steps;
 /// format 5 is format 6 without the Verlet list's build positions, so an explicit run with a
 /// skin written by it builds its list afresh at its first step; format 6 is format 7 without
 /// the settling stage (it was never written before `t = 0`); format 7 is format 8 without the
-/// density diffusion's books, which resume at zero (the energy rows read it as zero).
+/// density diffusion's books, which resume at zero (the energy rows read it as zero); format 8
+/// is format 9 without removed particles (none had left the domain: that stopped the run).
 pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -153,6 +155,10 @@ pub struct SimState<V: Vector> {
     pub diffusion_dissipation: f64,
     /// Diffusion dissipation rate at the last rate evaluation.
     pub diffusion_power: f64,
+    /// Particles removed as they left the domain.
+    pub removed: u64,
+    /// Cumulative energy of the removed particles.
+    pub removed_energy: f64,
     /// Current driving acceleration of the flux control.
     pub body_force: V,
     /// The flux controller's memory.
@@ -260,6 +266,8 @@ impl<V: Vector> SimState<V> {
         self.forcing_work = sim.forcing_work;
         self.diffusion_dissipation = sim.diffusion_dissipation;
         self.diffusion_power = sim.diffusion_power;
+        self.removed = sim.removed;
+        self.removed_energy = sim.removed_energy;
         self.body_force = sim.body_force;
         self.flux_history = sim.flux_history;
         self.last_iterations = sim.last_iterations;
@@ -343,8 +351,8 @@ impl<V: Vector> SimState<V> {
         Ok(())
     }
 
-    /// The fluid arrays have one length, the case's particle count, and the ids are a
-    /// permutation of `0..n`.
+    /// The fluid arrays have one length: with the removed particles, the case's particle
+    /// count; the ids are distinct and below it.
     fn check_fluid_counts(&self, sim: &Simulation<V>) -> Result<(), String> {
         let n = self.fluid.id.len();
         let f = &self.fluid;
@@ -371,7 +379,10 @@ impl<V: Vector> SimState<V> {
         if !(self.neighbour_origin.is_empty() || self.neighbour_origin.len() == n) {
             return Err("neighbour-list positions of another length than the fluid".into());
         }
-        // A part holds some of the ids, its own first; a whole run holds each id of the case.
+        // A part holds some of the ids, its own first; a whole run holds each id of the case
+        // but those of the particles removed as they left the domain (`sim` is the case built
+        // afresh, or a run of it that may have removed some).
+        let case_particles = sim.fluid.len() as u64 + sim.removed;
         let slots = match &self.layout {
             Some(layout) if layout.owned() > n => {
                 return Err(format!(
@@ -380,13 +391,13 @@ impl<V: Vector> SimState<V> {
                 ))
             }
             Some(_) => f.id.iter().max().map_or(0, |&m| m as usize + 1),
-            None if n != sim.fluid.len() => {
+            None if (n as u64).checked_add(self.removed) != Some(case_particles) => {
                 return Err(format!(
-                    "{n} fluid particles saved, the case builds {}",
-                    sim.fluid.len()
+                    "{n} fluid particles saved and {} removed, the case builds {case_particles}",
+                    self.removed,
                 ))
             }
-            None => n,
+            None => case_particles as usize,
         };
         let mut seen = vec![false; slots];
         for &id in &f.id {
@@ -511,6 +522,7 @@ impl<V: Vector> SimState<V> {
                 self.forcing_work,
                 self.diffusion_dissipation,
                 self.diffusion_power,
+                self.removed_energy,
                 self.flux_history.last,
                 self.flux_history.before_last,
                 self.flux_history.force,
@@ -612,6 +624,8 @@ impl<V: Vector> SimState<V> {
         sim.forcing_work = self.forcing_work;
         sim.diffusion_dissipation = self.diffusion_dissipation;
         sim.diffusion_power = self.diffusion_power;
+        sim.removed = self.removed;
+        sim.removed_energy = self.removed_energy;
         sim.body_force = self.body_force;
         sim.flux_history = self.flux_history;
         sim.last_iterations = self.last_iterations;
@@ -669,14 +683,15 @@ impl<V: Vector> SimState<V> {
 }
 
 /// Columns of `energy.csv` (and of the energy history a checkpoint keeps).
-pub const ENERGY_COLUMNS: usize = 9;
+pub const ENERGY_COLUMNS: usize = 10;
 
-/// Energy columns a checkpoint of layout `format` keeps (before format 8, without the last).
+/// Energy columns a checkpoint of layout `format` keeps (format 8 without the last, earlier
+/// formats without the last two).
 fn energy_columns(format: u32) -> usize {
-    if format >= 8 {
-        ENERGY_COLUMNS
-    } else {
-        ENERGY_COLUMNS - 1
+    match format {
+        9.. => ENERGY_COLUMNS,
+        8 => ENERGY_COLUMNS - 1,
+        _ => ENERGY_COLUMNS - 2,
     }
 }
 
@@ -1013,6 +1028,10 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
         w.f64(s.diffusion_dissipation);
         w.f64(s.diffusion_power);
     }
+    if format >= 9 {
+        w.u64(s.removed);
+        w.f64(s.removed_energy);
+    }
     w.0
 }
 
@@ -1152,6 +1171,10 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
     if format >= 8 {
         s.diffusion_dissipation = r.f64()?;
         s.diffusion_power = r.f64()?;
+    }
+    if format >= 9 {
+        s.removed = r.u64()?;
+        s.removed_energy = r.f64()?;
     }
     if r.at != bytes.len() {
         return Err(format!(
@@ -1322,7 +1345,9 @@ mod tests {
         c.sim.flux_history.last = 0.9;
         c.sim.diffusion_dissipation = 0.125;
         c.sim.diffusion_power = -0.5;
-        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0, 9.0]];
+        c.sim.removed = 3;
+        c.sim.removed_energy = 0.375;
+        c.history = vec![[1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0, 9.0, 10.0]];
         c.probe_history = vec![vec![0.0, 1.0], vec![0.1, 2.0]];
         c.settling = Some(SettleReport {
             steps: 321,
@@ -1362,19 +1387,41 @@ mod tests {
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads formats 4 to 8"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 9"),
             "{e}"
         );
     }
 
-    /// `c` as a layout before format 8 keeps it: no density diffusion books.
-    fn without_diffusion_books(mut c: Checkpoint<DVec2>) -> Checkpoint<DVec2> {
-        c.sim.diffusion_dissipation = 0.0;
-        c.sim.diffusion_power = 0.0;
+    /// `c` as a layout before format 9 keeps it: no removed particles.
+    fn without_removal(mut c: Checkpoint<DVec2>) -> Checkpoint<DVec2> {
+        c.sim.removed = 0;
+        c.sim.removed_energy = 0.0;
         for row in &mut c.history {
             row[ENERGY_COLUMNS - 1] = 0.0;
         }
         c
+    }
+
+    /// `c` as a layout before format 8 keeps it: no removed particles and no density
+    /// diffusion books.
+    fn without_diffusion_books(c: Checkpoint<DVec2>) -> Checkpoint<DVec2> {
+        let mut c = without_removal(c);
+        c.sim.diffusion_dissipation = 0.0;
+        c.sim.diffusion_power = 0.0;
+        for row in &mut c.history {
+            row[ENERGY_COLUMNS - 2] = 0.0;
+        }
+        c
+    }
+
+    #[test]
+    fn format_8_reads_without_removed_particles() {
+        let c = sample();
+        let back = decode::<DVec2>(Path::new("v8.bin"), &encode_format(&c, 8)).unwrap();
+        assert_eq!((back.sim.removed, back.sim.removed_energy), (0, 0.0));
+        assert_eq!(back.history[0][ENERGY_COLUMNS - 1], 0.0);
+        assert_eq!(back.sim.diffusion_dissipation, c.sim.diffusion_dissipation);
+        assert_eq!(encode(&back), encode(&without_removal(c)));
     }
 
     #[test]
@@ -1382,7 +1429,7 @@ mod tests {
         let c = sample();
         let back = decode::<DVec2>(Path::new("v7.bin"), &encode_format(&c, 7)).unwrap();
         assert_eq!(back.sim.diffusion_dissipation, 0.0);
-        assert_eq!(back.history[0][ENERGY_COLUMNS - 1], 0.0);
+        assert_eq!(back.history[0][ENERGY_COLUMNS - 2], 0.0);
         assert_eq!(back.settling, c.settling);
         assert_eq!(encode(&back), encode(&without_diffusion_books(c)));
     }

@@ -178,9 +178,12 @@ pub fn from_sim_error<V: Vector>(e: &SimError, sim: &Simulation<V>) -> Diagnosis
             TripKind::LeftDomain,
             "particle position".to_string(),
             format!(
-                "the domain {:?} to {:?}",
+                "the domain {:?} to {:?} ({} particles left it before and were removed, at most \
+                 {} may: diagnostics.removed_fraction_max)",
                 sim.config.domain_min.to_xyz(),
-                sim.config.domain_max.to_xyz()
+                sim.config.domain_max.to_xyz(),
+                sim.removed,
+                sim.config.max_removed
             ),
             f64::NAN,
             Some(*particle),

@@ -61,8 +61,11 @@ pub struct Summary {
     pub case: String,
     /// Dimension.
     pub dim: usize,
-    /// Fluid particles.
+    /// Fluid particles at the start (those removed included).
     pub fluid_particles: usize,
+    /// Fluid particles removed as they left the domain (their energy is the `removed` column
+    /// of `energy.csv`).
+    pub removed_particles: u64,
     /// Boundary elements.
     pub boundary_elements: usize,
     /// Steps taken.
@@ -491,6 +494,7 @@ fn series_headers<V: CaseDim>(
                 "viscous_dissipation",
                 "forcing_work",
                 "diffusion_dissipation",
+                "removed",
             ]
             .map(String::from)
             .to_vec(),
@@ -1006,6 +1010,7 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             e.viscous_dissipation,
             e.forcing_work,
             e.diffusion_dissipation,
+            e.removed,
         ];
         if let Some(csv) = self.outputs.get(ENERGY) {
             csv.row(&row)?;
@@ -1271,7 +1276,8 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
         Summary {
             case: self.loaded.case.name.clone(),
             dim: V::DIM,
-            fluid_particles: sim.fluid_count(),
+            fluid_particles: sim.fluid_count() + sim.removed as usize,
+            removed_particles: sim.removed,
             boundary_elements: sim.walls.elements.len(),
             steps: sim.step,
             time: sim.time,
@@ -1332,8 +1338,9 @@ fn write_plots(
         "viscous_dissipation",
         "forcing_work",
         "diffusion_dissipation",
+        "removed",
     ];
-    // Columns 6 to 8 only when they are used; `k + 1` is the column of `all[k]`.
+    // Columns 6 to 9 only when they are used; `k + 1` is the column of `all[k]`.
     let shown: Vec<(usize, &str)> = all
         .iter()
         .copied()

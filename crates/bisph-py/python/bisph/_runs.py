@@ -107,7 +107,7 @@ class Run:
 
     folder: Path
     #: ``energy.csv``: t, kinetic, compressible, potential, wall_work, total,
-    #: viscous_dissipation, forcing_work, diffusion_dissipation [J; J/m in 2-D].
+    #: viscous_dissipation, forcing_work, diffusion_dissipation, removed [J; J/m in 2-D].
     energy: Table
     #: ``forces.csv``: t, body, fx, fy (fz, mx, my, mz in 3-D) [N; N/m in 2-D].
     forces: Optional[Table]
