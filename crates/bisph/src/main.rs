@@ -257,7 +257,7 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             );
             if s.removed_particles > 0 {
                 println!(
-                    "{} fluid particles ({:.2}%) left the domain and were removed; their energy is the `removed` column of energy.csv",
+                    "{} fluid particles ({:.2}%) left the water's region (the domain, or over the rim of a wall) and were removed; their energy is the `removed` column of energy.csv",
                     s.removed_particles,
                     100.0 * s.removed_particles as f64 / s.fluid_particles.max(1) as f64
                 );

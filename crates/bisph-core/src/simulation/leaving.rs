@@ -1,5 +1,6 @@
-//! Particles that leave the domain through open space (a splash over a tank without a lid):
-//! each is removed as it leaves, its energy booked, until the run has lost
+//! Particles that leave the water's region through open space (a splash over a tank without a
+//! lid): out of the domain, or over the free edge of a wall to its back (the run's watch finds
+//! those). Each is removed as it leaves, its energy booked, until the run has lost
 //! [`SimConfig::max_removed`](super::SimConfig::max_removed) of them; one more stops it.
 
 use super::Simulation;
@@ -14,18 +15,12 @@ impl<V: Vector> Simulation<V> {
         (0..V::DIM).any(|k| !(r.get(k) >= lo.get(k) && r.get(k) <= hi.get(k)))
     }
 
-    /// Removes the own particles with a finite state outside the domain, when the run may
-    /// still lose all of them. Their energy, `sum m (|u|^2 / 2 + e(rho) - g . r)` summed
-    /// exactly over every part, goes to [`Simulation::removed_energy`], so the energy total
-    /// still closes; the neighbour list is dropped, so the next step rebuilds the grid and the
-    /// list (and a split run hands its particles over and selects its halos again, which drops
-    /// the halo copies of the removed particles). Every part must call it. Returns whether
-    /// particles were removed; `false` changes nothing. Each step calls it when a particle
-    /// left the domain.
+    /// Removes the own particles with a finite state outside the domain
+    /// ([`Simulation::remove_own`]). Every part must call it. Each step calls it when a
+    /// particle left the domain.
     pub fn remove_leaving(&mut self) -> bool {
         let f = &self.fluid;
-        let owned = self.owned_len();
-        let leaving: Vec<usize> = (0..owned)
+        let leaving: Vec<usize> = (0..self.owned_len())
             .filter(|&i| {
                 let r = f.position[i];
                 r.is_finite()
@@ -35,23 +30,38 @@ impl<V: Vector> Simulation<V> {
                     && self.outside_domain(r)
             })
             .collect();
-        let count = self.total_over_parts(leaving.len() as f64) as u64;
+        self.remove_own(&leaving)
+    }
+
+    /// Removes the own particles `own` (indices below [`Simulation::owned_len`], increasing)
+    /// when the run may still lose them all, over every part ([`SimConfig::max_removed`]).
+    /// Their energy, `sum m (|u|^2 / 2 + e(rho) - g . r)` summed exactly over the parts, goes
+    /// to [`Simulation::removed_energy`], so the energy total still closes; the neighbour
+    /// list is dropped, so the next step rebuilds the grid and the list (and a split run hands
+    /// its particles over and selects its halos again, which drops the halo copies of the
+    /// removed particles). Every part must call it, with its own particles (none, for some).
+    /// Returns whether particles were removed; `false` changes nothing.
+    ///
+    /// [`SimConfig::max_removed`]: super::SimConfig::max_removed
+    pub fn remove_own(&mut self, own: &[usize]) -> bool {
+        let count = self.total_over_parts(own.len() as f64) as u64;
         if count == 0 || self.removed + count > self.config.max_removed {
             return false;
         }
+        let f = &self.fluid;
         let (eos, gravity) = (&self.config.eos, self.config.gravity);
         let mut energy = ExactSum::new();
-        energy.add_all(leaving.iter().map(|&i| particle_energy(f, i, eos, gravity)));
+        energy.add_all(own.iter().map(|&i| particle_energy(f, i, eos, gravity)));
         let mut energy = [energy];
         self.sum_over_parts(&mut energy);
         let mut gone = vec![false; f.len()];
-        for &i in &leaving {
+        for &i in own {
             gone[i] = true;
         }
         let kept: Vec<u32> = (0..f.len() as u32).filter(|&i| !gone[i as usize]).collect();
         self.fluid.permute(&kept, &mut self.scratch.permute);
         if let Some(part) = &mut self.part {
-            part.owned -= leaving.len();
+            part.owned -= own.len();
         }
         self.removed += count;
         self.removed_energy += energy[0].value();

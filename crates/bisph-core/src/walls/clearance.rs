@@ -1,7 +1,9 @@
 //! Lower bounds of the particles' distances to fixed walls, measured when the explicit
 //! scheme's Verlet list is built and valid while it holds (no particle has moved more than
 //! half the skin since). They spare the elastic bounce and the wall-crossing watch the
-//! element search for particles that no wall can concern within a step.
+//! element search for particles that no wall can concern within a step. A particle that lies
+//! behind a wall at the measurement (water that went over the rim of an open wall) gets no
+//! bound, so the watch looks at it at every step.
 
 use super::Walls;
 use crate::dim::Vector;
@@ -25,7 +27,8 @@ pub struct WallClearance {
 impl WallClearance {
     /// Measures the bounds at `points`; `slack` is how far a particle may move before the
     /// caller measures again or [`WallClearance::forget`]s them. Walls that may move get no
-    /// bounds.
+    /// bounds, nor do points behind a wall within a cell less the largest reach
+    /// ([`Walls::signed_distance`] positive).
     pub fn measure<V: Vector>(&mut self, walls: &Walls<V>, points: &[V], slack: f64) {
         if walls.has_moving_bodies() {
             self.forget();
@@ -34,6 +37,7 @@ impl WallClearance {
         let (elements, grid) = (&walls.elements, &walls.grid);
         let reach = |j: usize| elements.reach[j] * (1.0 + REACH_ALLOWANCE);
         let far = grid.cell_size() - elements.max_reach * (1.0 + REACH_ALLOWANCE);
+        let behind_search = far.max(0.5 * grid.cell_size());
         self.lower_bound.resize(points.len(), 0.0);
         self.lower_bound
             .par_iter_mut()
@@ -48,6 +52,14 @@ impl WallClearance {
                     let d = (x - elements.centre[j] - shift).length() - reach(j);
                     *bound = bound.min(d);
                 });
+                if *bound < far
+                    && walls.may_be_behind(x, behind_search)
+                    && walls
+                        .signed_distance(x, behind_search)
+                        .is_some_and(|d| d > 0.0)
+                {
+                    *bound = f64::NEG_INFINITY;
+                }
             });
         self.slack = slack;
         self.measured = !elements.is_empty();
@@ -130,5 +142,25 @@ mod tests {
         assert!(clearance.clear(0, 0.05) && !clearance.clear(0, 0.2));
         clearance.forget();
         assert!(!clearance.clear(0, 0.0));
+    }
+
+    /// A point behind a wall (out of the box, as water that went over its rim) is never
+    /// clear; its mirror image inside is.
+    #[test]
+    fn points_behind_a_wall_get_no_bound() {
+        let walls = open_box();
+        let points = [DVec3::new(-0.1, 0.5, 0.5), DVec3::new(0.1, 0.5, 0.5)];
+        let mut clearance = WallClearance::default();
+        clearance.measure(&walls, &points, 0.0);
+        assert!(
+            !clearance.clear(0, 0.0),
+            "behind: {}",
+            clearance.lower_bound[0]
+        );
+        assert!(
+            clearance.clear(1, 0.01),
+            "inside: {}",
+            clearance.lower_bound[1]
+        );
     }
 }

@@ -6,6 +6,7 @@
 pub mod bounce;
 pub mod clearance;
 pub mod energy_bi;
+mod free_edges;
 pub mod gamma_cache;
 pub mod geometric_shepard;
 pub mod integrated_shepard;

@@ -337,7 +337,7 @@ impl Watch {
     /// step's size. Returns the first watch that trips, in the order of [`TripKind`].
     pub fn check<V: Vector>(
         &mut self,
-        sim: &Simulation<V>,
+        sim: &mut Simulation<V>,
         previous: &SimState<V>,
         dt0: f64,
     ) -> Option<Diagnosis> {
@@ -423,12 +423,72 @@ impl Watch {
     ///   moving body's walls are left to the path test (a moving wall
     ///   may end a step a little past a particle it sweeps over).
     ///
-    /// The depth reported is the larger of the two.
+    /// The depth reported is the larger of the two. A particle found by the second test alone,
+    /// within a kernel support of a free edge of the walls (the rim of an open side,
+    /// [`bisph_core::walls::Walls::near_free_edge`]), or coming from beyond the reach of every
+    /// wall or from behind a wall by more than h/100 already, came round the walls to their
+    /// back: it left the water's region, and is removed like a particle leaving the domain
+    /// ([`Simulation::remove_own`]) while the run may lose it; the others stop the run.
     fn wall_crossing<V: Vector>(
+        &mut self,
+        sim: &mut Simulation<V>,
+        previous: &SimState<V>,
+    ) -> Option<Diagnosis> {
+        let behind = self.behind_walls(sim, previous);
+        let depth = |i: usize, around: bool| {
+            let k = behind.binary_search_by_key(&i, |b| b.0).ok()?;
+            match behind[k].1 {
+                Behind::Crossed(d) if !around => Some((d, d)),
+                Behind::Around(d) if around => Some((d, d)),
+                _ => None,
+            }
+        };
+        let flagged = violators(sim, |i| depth(i, false).or(depth(i, true)));
+        if flagged.count == 0 {
+            return None;
+        }
+        let allowed = format!(
+            "at most h/100 = {:e} (particles stay on the fluid side; diagnostics.wall_crossing)",
+            0.01 * sim.config.kernel.h
+        );
+        let quantity = "depth behind a crossed wall element [m]";
+        let crossed = violators(sim, |i| depth(i, false));
+        if crossed.count > 0 {
+            return Some(diagnosis(
+                sim,
+                TripKind::WallCrossing,
+                quantity,
+                allowed,
+                crossed,
+            ));
+        }
+        let around: Vec<usize> = behind.iter().map(|b| b.0).collect();
+        if sim.remove_own(&around) {
+            return None;
+        }
+        let around = violators(sim, |i| depth(i, true));
+        let allowed = format!(
+            "{allowed}; these came round the walls, over the free edge of a wall or from open \
+             space, and {} particles left before and were removed, at most {} may \
+             (diagnostics.removed_fraction_max)",
+            sim.removed, sim.config.max_removed
+        );
+        Some(diagnosis(
+            sim,
+            TripKind::WallCrossing,
+            quantity,
+            allowed,
+            around,
+        ))
+    }
+
+    /// The own particles that lie behind a wall ([`Watch::wall_crossing`]), in increasing
+    /// index, and how they got there.
+    fn behind_walls<V: Vector>(
         &mut self,
         sim: &Simulation<V>,
         previous: &SimState<V>,
-    ) -> Option<Diagnosis> {
+    ) -> Vec<(usize, Behind)> {
         let f = &sim.fluid;
         // Where each particle was before the step, by id. A part of a split run finds there
         // its own particles and its halo of that moment: a particle it took over at a cut of
@@ -451,75 +511,102 @@ impl Watch {
         let index = &self.previous_index;
         let moving = sim.walls.has_moving_bodies();
         let clearance = sim.wall_clearance();
-        let bad = violators(sim, |i| {
-            let p1 = f.position[i];
-            // The position before the step (the particle itself when it has none).
-            let p0 = index
-                .get(f.id[i] as usize)
-                .and_then(|&k| previous.fluid.position.get(k as usize))
-                .copied()
-                .unwrap_or(p1);
-            // A path through an element ends within the step's length of the wall, and a
-            // particle at most `tolerance` behind a wall before the step lies at most that
-            // plus the step's length from it after: farther, neither test can trip.
-            if clearance.clear(i, (p1 - p0).length() + tolerance) {
-                return None;
-            }
-            let radius = ((p1 - p0).length() + e.max_reach).min(support);
-            let mut depth: Option<f64> = None;
-            sim.walls
-                .grid
-                .for_each_neighbour(p1, &e.centre, radius, |j, _, _| {
-                    let (c, nrm) = (e.centre[j], e.normal[j]);
-                    let s0 = (p0 - c).dot(nrm);
-                    let s1 = (p1 - c).dot(nrm);
-                    if !(s0 <= 0.0 && s1 > 0.0) {
-                        return;
-                    }
-                    let x = p0 + (p1 - p0) * (-s0 / (s1 - s0));
-                    if inside_element(x, nrm, e.current_corners(j)) {
-                        depth = Some(depth.map_or(s1, |d: f64| d.max(s1)));
-                    }
-                });
-            // Gradual crossings: the particle lies behind the wall surface now, whatever its
-            // path (the signed distance to the nearest element, with pseudonormals at corners).
-            // Near a moving body's walls only the path test applies: a moving wall may end a
-            // step a little past a particle it sweeps over (the wall term pushes it back).
-            let mut near_moving = false;
-            if moving {
-                sim.walls.grid.for_each_neighbour(
-                    p1,
-                    &e.centre,
-                    behind_search + e.max_reach,
-                    |j, _, _| {
-                        near_moving |=
-                            !matches!(sim.walls.bodies[e.body[j] as usize].motion, Motion::Fixed);
-                    },
-                );
-            }
-            if !near_moving && sim.walls.may_be_behind(p1, behind_search) {
-                if let Some(behind) = sim.walls.signed_distance(p1, behind_search) {
-                    if behind > 0.0 {
-                        depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
+        (0..sim.owned_len())
+            .into_par_iter()
+            .filter_map(|i| {
+                let p1 = f.position[i];
+                // The position before the step (the particle itself when it has none).
+                let p0 = index
+                    .get(f.id[i] as usize)
+                    .and_then(|&k| previous.fluid.position.get(k as usize))
+                    .copied()
+                    .unwrap_or(p1);
+                // A path through an element ends within the step's length of the wall, and a
+                // particle at most `tolerance` behind a wall before the step lies at most that
+                // plus the step's length from it after: farther, neither test can trip.
+                if clearance.clear(i, (p1 - p0).length() + tolerance) {
+                    return None;
+                }
+                let radius = ((p1 - p0).length() + e.max_reach).min(support);
+                let mut depth: Option<f64> = None;
+                let mut through = false;
+                sim.walls
+                    .grid
+                    .for_each_neighbour(p1, &e.centre, radius, |j, _, _| {
+                        let (c, nrm) = (e.centre[j], e.normal[j]);
+                        let s0 = (p0 - c).dot(nrm);
+                        let s1 = (p1 - c).dot(nrm);
+                        if !(s0 <= 0.0 && s1 > 0.0) {
+                            return;
+                        }
+                        let x = p0 + (p1 - p0) * (-s0 / (s1 - s0));
+                        if inside_element(x, nrm, e.current_corners(j)) {
+                            depth = Some(depth.map_or(s1, |d: f64| d.max(s1)));
+                            through = true;
+                        }
+                    });
+                // Gradual crossings: the particle lies behind the wall surface now, whatever its
+                // path (the signed distance to the nearest element, with pseudonormals at corners).
+                // Near a moving body's walls only the path test applies: a moving wall may end a
+                // step a little past a particle it sweeps over (the wall term pushes it back).
+                let mut near_moving = false;
+                if moving {
+                    sim.walls.grid.for_each_neighbour(
+                        p1,
+                        &e.centre,
+                        behind_search + e.max_reach,
+                        |j, _, _| {
+                            near_moving |= !matches!(
+                                sim.walls.bodies[e.body[j] as usize].motion,
+                                Motion::Fixed
+                            );
+                        },
+                    );
+                }
+                if !near_moving && sim.walls.may_be_behind(p1, behind_search) {
+                    if let Some(behind) = sim.walls.signed_distance(p1, behind_search) {
+                        if behind > 0.0 {
+                            depth = Some(depth.map_or(behind, |d: f64| d.max(behind)));
+                        }
                     }
                 }
-            }
-            depth.filter(|&d| d > tolerance).map(|d| (d, d))
-        });
-        if bad.count == 0 {
-            return None;
-        }
-        Some(diagnosis(
-            sim,
-            TripKind::WallCrossing,
-            "depth behind a crossed wall element [m]",
-            format!(
-                "at most h/100 = {:e} (particles stay on the fluid side; diagnostics.wall_crossing)",
-                0.01 * sim.config.kernel.h
-            ),
-            bad,
-        ))
+                let depth = depth.filter(|&d| d > tolerance)?;
+                // Round the walls: over a free edge, or from a place before the step beyond
+                // every wall's reach or already behind a wall by more than the tolerance (a
+                // particle in front of the walls is caught as soon as it gets that deep, so this
+                // one never was in front: it came over a rim out of the watch's reach and falls
+                // down the back of the wall).
+                let around = !through
+                    && (sim.walls.near_free_edge(p1, support)
+                        || (p0 != p1
+                            && sim
+                                .walls
+                                .signed_distance(p0, behind_search)
+                                .is_none_or(|d0| d0 > tolerance)));
+                Some((
+                    i,
+                    if around {
+                        Behind::Around(depth)
+                    } else {
+                        Behind::Crossed(depth)
+                    },
+                ))
+            })
+            .collect()
     }
+}
+
+/// How a particle came to lie behind a wall.
+#[derive(Clone, Copy, Debug)]
+enum Behind {
+    /// Through the wall, to this depth: its path crossed an element, or it lies behind the
+    /// wall away from any free edge.
+    Crossed(f64),
+    /// Round the walls, to this depth, without crossing an element in the step: over a free
+    /// edge of a wall (the rim of an open side), or from beyond the reach of every wall or
+    /// from behind a wall already (water that went over a rim earlier and falls down the back
+    /// of the wall).
+    Around(f64),
 }
 
 /// `true` when `x` (on the element's plane) lies within the element: between the two end
@@ -656,9 +743,10 @@ mod tests {
         let mut watch = Watch::new(loaded.case.diagnostics.clone());
         let mut previous = SimState::default();
         previous.capture(&sim);
-        assert!(watch.check(&sim, &previous, 0.0).is_none());
+        assert!(watch.check(&mut sim, &previous, 0.0).is_none());
         let h = sim.config.kernel.h;
-        // The particle nearest the left wall, moved behind it: 0.05 h last step, 0.02 h now.
+        // The particle nearest the left wall, moved behind it: 0.009 h last step (within the
+        // tolerance), 0.0115 h now.
         let i = (0..sim.fluid.len())
             .min_by(|&a, &b| {
                 let (pa, pb) = (sim.fluid.position[a], sim.fluid.position[b]);
@@ -666,16 +754,101 @@ mod tests {
             })
             .unwrap();
         let y = sim.fluid.position[i].y;
-        sim.fluid.position[i] = DVec2::new(-0.05 * h, y);
+        sim.fluid.position[i] = DVec2::new(-0.009 * h, y);
         previous.capture(&sim);
-        sim.fluid.position[i] = DVec2::new(-0.052 * h, y);
-        let d = watch.check(&sim, &previous, 0.0).expect("the watch trips");
+        sim.fluid.position[i] = DVec2::new(-0.0115 * h, y);
+        let d = watch
+            .check(&mut sim, &previous, 0.0)
+            .expect("the watch trips");
         assert_eq!(d.kind, TripKind::WallCrossing);
-        assert!((d.value - 0.052 * h).abs() < 1e-12, "{}", d.value);
+        assert!((d.value - 0.0115 * h).abs() < 1e-12, "{}", d.value);
         assert_eq!(d.particles[0].id, sim.fluid.id[i]);
         // Behind by less than h/100: no trip.
         sim.fluid.position[i] = DVec2::new(-0.009 * h, y);
         previous.capture(&sim);
-        assert!(watch.check(&sim, &previous, 0.0).is_none());
+        assert!(watch.check(&mut sim, &previous, 0.0).is_none());
+    }
+
+    /// The dam break at `dx = 0.02` in its tank without a lid, with `removed_fraction_max`;
+    /// its particle nearest the left wall.
+    fn open_tank(removed_fraction_max: f64) -> (Simulation<DVec2>, Watch, usize) {
+        let text = include_str!("../../../../cases/dam-break-2d.toml");
+        let overrides = [
+            "resolution.dx=0.02".to_string(),
+            "wall.0.open=[\"+y\"]".to_string(),
+            format!("diagnostics.removed_fraction_max={removed_fraction_max}"),
+        ];
+        let loaded = parse_case("<dam-break-2d>", text, &overrides).unwrap();
+        let sim: Simulation<DVec2> = build_simulation(&loaded).unwrap();
+        let watch = Watch::new(loaded.case.diagnostics.clone());
+        let i = (0..sim.fluid.len())
+            .min_by(|&a, &b| sim.fluid.position[a].x.total_cmp(&sim.fluid.position[b].x))
+            .unwrap();
+        (sim, watch, i)
+    }
+
+    /// Puts particle `i` behind the left wall at height `y`, `0.009 h` deep before the step
+    /// (within the watch's tolerance) and `0.06 h` after it (no path through an element), and
+    /// checks the state; the energy total before the check.
+    fn behind_left_wall(
+        sim: &mut Simulation<DVec2>,
+        watch: &mut Watch,
+        i: usize,
+        y: f64,
+    ) -> (Option<Diagnosis>, f64) {
+        let h = sim.config.kernel.h;
+        sim.fluid.position[i] = DVec2::new(-0.009 * h, y);
+        let mut previous = SimState::default();
+        previous.capture(sim);
+        sim.fluid.position[i] = DVec2::new(-0.06 * h, y);
+        let total = sim.energy().total;
+        (watch.check(sim, &previous, 0.0), total)
+    }
+
+    /// Water that went over the rim of the open tank's wall (behind it, just below its top,
+    /// without crossing an element) left the tank: it is removed, within the allowance, as is
+    /// water that comes to the back of the wall from beyond its reach. Behind the wall away
+    /// from the rim, from in front of it, it went through the wall: the watch trips.
+    #[test]
+    fn water_over_the_rim_of_an_open_wall_is_removed() {
+        let (mut sim, mut watch, i) = open_tank(0.01);
+        let (n, id) = (sim.fluid.len(), sim.fluid.id[i]);
+        let (tripped, e0) = behind_left_wall(&mut sim, &mut watch, i, 0.59);
+        assert!(tripped.is_none());
+        assert_eq!((sim.removed, sim.fluid.len()), (1, n - 1));
+        assert!(!sim.fluid.id.contains(&id));
+        let e = sim.energy();
+        assert!(
+            e.removed != 0.0 && (e.total - e0).abs() <= 1e-12 * e0.abs(),
+            "{e:?}"
+        );
+
+        let (mut sim, mut watch, i) = open_tank(0.01);
+        let d = behind_left_wall(&mut sim, &mut watch, i, 0.3)
+            .0
+            .expect("the watch trips");
+        assert_eq!(
+            (d.kind, d.particles[0].id),
+            (TripKind::WallCrossing, sim.fluid.id[i])
+        );
+        assert_eq!(sim.removed, 0);
+
+        // Falling down the back of the wall from beyond its reach: removed as well.
+        let (mut sim, mut watch, i) = open_tank(0.01);
+        let h = sim.config.kernel.h;
+        sim.fluid.position[i] = DVec2::new(-0.2, 0.35);
+        let mut previous = SimState::default();
+        previous.capture(&sim);
+        sim.fluid.position[i] = DVec2::new(-0.06 * h, 0.3);
+        assert!(watch.check(&mut sim, &previous, 0.0).is_none());
+        assert_eq!(sim.removed, 1);
+
+        let (mut sim, mut watch, i) = open_tank(0.0);
+        let d = behind_left_wall(&mut sim, &mut watch, i, 0.59)
+            .0
+            .expect("no allowance");
+        assert_eq!(d.kind, TripKind::WallCrossing);
+        assert!(d.allowed.contains("free edge of a wall"), "{}", d.allowed);
+        assert_eq!(sim.removed, 0);
     }
 }
