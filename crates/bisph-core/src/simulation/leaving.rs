@@ -33,7 +33,7 @@ impl<V: Vector> Simulation<V> {
         self.remove_own(&leaving)
     }
 
-    /// Removes the own particles `own` (indices below [`Simulation::owned_len`], increasing)
+    /// Removes the own particles `own` (distinct indices below [`Simulation::owned_len`])
     /// when the run may still lose them all, over every part ([`SimConfig::max_removed`]).
     /// Their energy, `sum m (|u|^2 / 2 + e(rho) - g . r)` summed exactly over the parts, goes
     /// to [`Simulation::removed_energy`], so the energy total still closes; the neighbour
