@@ -57,12 +57,27 @@ pub fn exact_partial_sum(n: usize, f: impl Fn(usize) -> f64 + Sync) -> ExactSum 
         })
 }
 
+/// The kinetic energy of particle `i`, `m_i |u_i|^2 / 2`.
+fn kinetic_energy<V: Vector>(fluid: &Fluid<V>, i: usize) -> f64 {
+    0.5 * fluid.mass[i] * fluid.velocity[i].length_squared()
+}
+
+/// The compression energy of particle `i`, `m_i e(rho_i)`.
+fn compressible_energy<V: Vector>(fluid: &Fluid<V>, i: usize, eos: &Eos) -> f64 {
+    fluid.mass[i] * eos.specific_energy(fluid.density[i])
+}
+
+/// The potential energy of particle `i` in gravity, `-m_i g . r_i`.
+fn potential_energy<V: Vector>(fluid: &Fluid<V>, i: usize, gravity: V) -> f64 {
+    -fluid.mass[i] * gravity.dot(fluid.position[i])
+}
+
 /// The kinetic, compressible and potential energy of particle `i`,
 /// `m_i (|u_i|^2 / 2 + e(rho_i) - g . r_i)`: the terms of [`fluid_energy_sums`].
 pub fn particle_energy<V: Vector>(fluid: &Fluid<V>, i: usize, eos: &Eos, gravity: V) -> f64 {
-    let m = fluid.mass[i];
-    0.5 * m * fluid.velocity[i].length_squared() + m * eos.specific_energy(fluid.density[i])
-        - m * gravity.dot(fluid.position[i])
+    kinetic_energy(fluid, i)
+        + compressible_energy(fluid, i, eos)
+        + potential_energy(fluid, i, gravity)
 }
 
 /// The fluid's kinetic, compressible and potential energies.
@@ -78,12 +93,9 @@ pub fn fluid_energy_sums<V: Vector>(
     eos: &Eos,
     gravity: V,
 ) -> [ExactSum; 3] {
-    let kinetic = exact_partial_sum(n, |i| {
-        0.5 * fluid.mass[i] * fluid.velocity[i].length_squared()
-    });
-    let compressible =
-        exact_partial_sum(n, |i| fluid.mass[i] * eos.specific_energy(fluid.density[i]));
-    let potential = exact_partial_sum(n, |i| -fluid.mass[i] * gravity.dot(fluid.position[i]));
+    let kinetic = exact_partial_sum(n, |i| kinetic_energy(fluid, i));
+    let compressible = exact_partial_sum(n, |i| compressible_energy(fluid, i, eos));
+    let potential = exact_partial_sum(n, |i| potential_energy(fluid, i, gravity));
     [kinetic, compressible, potential]
 }
 

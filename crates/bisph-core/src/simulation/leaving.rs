@@ -3,6 +3,7 @@
 //! those). Each is removed as it leaves, its energy booked, until the run has lost
 //! [`SimConfig::max_removed`](super::SimConfig::max_removed) of them; one more stops it.
 
+use super::part_state::Fault;
 use super::Simulation;
 use crate::decomposition::ExactSum;
 use crate::dim::Vector;
@@ -19,16 +20,8 @@ impl<V: Vector> Simulation<V> {
     /// ([`Simulation::remove_own`]). Every part must call it. Each step calls it when a
     /// particle left the domain.
     pub fn remove_leaving(&mut self) -> bool {
-        let f = &self.fluid;
         let leaving: Vec<usize> = (0..self.owned_len())
-            .filter(|&i| {
-                let r = f.position[i];
-                r.is_finite()
-                    && f.velocity[i].is_finite()
-                    && f.density[i].is_finite()
-                    && f.density[i] > 0.0
-                    && self.outside_domain(r)
-            })
+            .filter(|&i| self.fault(i) == Some(Fault::Outside))
             .collect();
         self.remove_own(&leaving)
     }

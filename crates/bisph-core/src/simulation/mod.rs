@@ -1078,24 +1078,31 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
+    /// What is wrong with particle `i`, in the order the checks look: a non-finite state,
+    /// then a place outside the domain (`None`: nothing).
+    pub(crate) fn fault(&self, i: usize) -> Option<Fault> {
+        let f = &self.fluid;
+        let r = f.position[i];
+        if !r.is_finite() {
+            Some(Fault::Position)
+        } else if !f.velocity[i].is_finite() {
+            Some(Fault::Velocity)
+        } else if !(f.density[i].is_finite() && f.density[i] > 0.0) {
+            Some(Fault::Density)
+        } else if self.outside_domain(r) {
+            Some(Fault::Outside)
+        } else {
+            None
+        }
+    }
+
     /// Of the own particles with a non-finite state or outside the domain, the one with the
     /// lowest id.
     fn first_bad_particle(&self) -> Option<BadParticle> {
         let f = &self.fluid;
         let bad = |i: usize| {
-            let r = f.position[i];
-            let fault = if !r.is_finite() {
-                Fault::Position
-            } else if !f.velocity[i].is_finite() {
-                Fault::Velocity
-            } else if !(f.density[i].is_finite() && f.density[i] > 0.0) {
-                Fault::Density
-            } else if self.outside_domain(r) {
-                Fault::Outside
-            } else {
-                return None;
-            };
-            Some(BadParticle::new(f.id[i], fault, r.to_xyz()))
+            let fault = self.fault(i)?;
+            Some(BadParticle::new(f.id[i], fault, f.position[i].to_xyz()))
         };
         // Blocks scanned in parallel for any bad particle; all are then looked at in turn
         // (only when the run stops).

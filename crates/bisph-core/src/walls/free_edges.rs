@@ -3,6 +3,7 @@
 //! over such an edge to the back of the wall has left the region the walls bound.
 
 use super::Walls;
+use crate::bi::segment::point_segment_distance;
 use crate::dim::Vector;
 
 impl<V: Vector> Walls<V> {
@@ -32,7 +33,7 @@ impl<V: Vector> Walls<V> {
         };
         near.iter().any(|&(j, shift)| {
             edges(j, shift).into_iter().any(|(a, b)| {
-                distance_to_segment(x, a, b) <= radius
+                point_segment_distance(x, a, b) <= radius
                     && !near.iter().any(|&(k, other)| {
                         k != j
                             && edges(k, other).into_iter().any(|(c, d)| {
@@ -42,18 +43,6 @@ impl<V: Vector> Walls<V> {
             })
         })
     }
-}
-
-/// Distance from `x` to the segment from `a` to `b` (to `a` when they coincide).
-fn distance_to_segment<V: Vector>(x: V, a: V, b: V) -> f64 {
-    let ab = b - a;
-    let l2 = ab.length_squared();
-    let t = if l2 > 0.0 {
-        ((x - a).dot(ab) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (x - (a + ab * t)).length()
 }
 
 #[cfg(test)]

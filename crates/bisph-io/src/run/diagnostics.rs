@@ -334,7 +334,9 @@ impl Watch {
     }
 
     /// Checks the state after a step; `previous` is the state before it, `dt0` the first
-    /// step's size. Returns the first watch that trips, in the order of [`TripKind`].
+    /// step's size. Returns the first watch that trips, in the order of [`TripKind`]. Removes
+    /// the particles that came round the walls while the run may lose them
+    /// ([`Watch::wall_crossing`]).
     pub fn check<V: Vector>(
         &mut self,
         sim: &mut Simulation<V>,
