@@ -104,6 +104,7 @@ fn powers<V: Vector>(
         body_force: V::ZERO,
         density_power: 0,
         summation_density: false,
+        wall_continuity_in_drift: false,
     };
     let volume: Vec<f64> = state
         .mass

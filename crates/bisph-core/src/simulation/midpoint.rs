@@ -33,6 +33,7 @@ use super::Simulation;
 use crate::dim::Vector;
 use crate::error::SimError;
 use crate::walls::bounce::elastic_bounce;
+use crate::walls::shepard::ShepardKind;
 use rayon::prelude::*;
 
 impl<V: Vector> Simulation<V> {
@@ -126,6 +127,7 @@ impl<V: Vector> Simulation<V> {
         self.walls.set_dynamic_velocities(&body_velocity);
 
         // Corrector: u^{n+1} = u^n + dt a, drift (u^n + u^{n+1}) / 2.
+        let integrated_gamma = self.carried_gamma() == Some(ShepardKind::Integrated);
         let f = &mut self.fluid;
         let drift = &mut self.scratch.drift_velocity;
         drift.clear();
@@ -156,15 +158,18 @@ impl<V: Vector> Simulation<V> {
             .par_iter_mut()
             .zip(drift.par_iter())
             .for_each(|(r, &u)| *r += u * dt);
-        super::advance_gamma(
-            &self.config,
-            &self.walls,
-            &mut f.gamma,
-            &mut f.grad_gamma,
-            &f.position,
-            drift,
-            dt,
-        );
+        if integrated_gamma {
+            super::advance_gamma(
+                &self.config,
+                &self.walls,
+                &mut f.gamma,
+                &mut f.grad_gamma,
+                &f.position,
+                drift,
+                dt,
+                None,
+            );
+        }
         f.density
             .par_iter_mut()
             .zip(f.density_rate.par_iter())
@@ -180,6 +185,7 @@ impl<V: Vector> Simulation<V> {
         self.check_state()?;
         self.walls.move_to(self.time);
         self.step_neighbours();
+        self.place_geometric_gamma();
         self.refresh_pressure();
         Ok(())
     }

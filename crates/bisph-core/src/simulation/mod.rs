@@ -31,7 +31,7 @@ use crate::terms::{
 };
 use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
-use crate::walls::shepard::Shepard;
+use crate::walls::shepard::{Shepard, ShepardKind, WallContinuity};
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
 use part_state::{BadParticle, Fault, HaloFields, Part};
@@ -481,8 +481,26 @@ impl<V: Vector> Simulation<V> {
         );
     }
 
-    /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]).
+    /// Which gamma the particles carry, if any.
+    pub(crate) fn carried_gamma(&self) -> Option<ShepardKind> {
+        let shepard = self.config.wall_model.shepard();
+        shepard.filter(|s| s.carried).map(|s| s.kind)
+    }
+
+    /// Sets the gamma the particles carry to the geometric value where they and the walls now
+    /// are, when that is the gamma they carry (the other models keep theirs).
+    pub fn place_geometric_gamma(&mut self) {
+        if self.carried_gamma() == Some(ShepardKind::Geometric) {
+            self.geometric_gamma();
+        }
+    }
+
+    /// Advances gamma after a drift by `dt` with the current velocities (see [`advance_gamma`]),
+    /// with the walls' part of the continuity equation when the drift integrates it
+    /// ([`Simulation::wall_continuity_in_drift`]).
     pub(crate) fn advance_gamma(&mut self, dt: f64) {
+        let in_drift = self.wall_continuity_in_drift();
+        let rest = self.config.eos.rho0();
         let f = &mut self.fluid;
         advance_gamma(
             &self.config,
@@ -492,7 +510,23 @@ impl<V: Vector> Simulation<V> {
             &f.position,
             &f.velocity,
             dt,
+            in_drift.then_some(WallContinuity {
+                density: &mut f.density,
+                rest,
+            }),
         );
+    }
+
+    /// `true` when the explicit integrator takes the walls' part of the continuity equation
+    /// out of the rates and integrates it exactly over each drift, `rho *= gamma^n /
+    /// gamma^{n+1}` ([`Shepard::advance`]): under velocity Verlet, the classic boundary
+    /// integrals whose wall term is `-rho dln(gamma)/dt`
+    /// ([`WallModelChoice::wall_divergence_is_gamma_rate`]). Integrated in the rates instead, the term's
+    /// stiffness near concave edges, `c0 |grad gamma| / gamma`, would grow under the explicit
+    /// scheme's predictor.
+    pub(crate) fn wall_continuity_in_drift(&self) -> bool {
+        self.config.integrator == Integrator::Verlet
+            && self.config.wall_model.wall_divergence_is_gamma_rate()
     }
 
     /// `true` when some term evaluates the geometric Shepard factor during the run: the
@@ -637,6 +671,7 @@ impl<V: Vector> Simulation<V> {
             body_force: self.body_force,
             density_power: c.wall_model.density_power(),
             summation_density: self.summation(),
+            wall_continuity_in_drift: self.wall_continuity_in_drift(),
         }
     }
 
@@ -979,7 +1014,11 @@ impl<V: Vector> Simulation<V> {
         self.fluid.acceleration = saved.0;
         self.fluid.density_rate = saved.1;
         self.wall_power = wall_power;
-        let model = self.rate_model();
+        // The full operators, the walls' divergence included.
+        let model = RateModel {
+            wall_continuity_in_drift: false,
+            ..self.rate_model()
+        };
         let f = &self.fluid;
         let state = FluidState {
             position: &f.position,
@@ -1227,8 +1266,10 @@ impl<V: Vector> Simulation<V> {
     }
 }
 
-/// Advances the gamma the particles carry after a drift `r += u dt` ([`Shepard::advance`]).
-/// Does nothing for models whose particles carry none.
+/// Advances the gamma the particles carry after a drift `r += u dt`, and with `continuity` the
+/// walls' part of the continuity equation ([`Shepard::advance`]). Does nothing for models
+/// whose particles carry none.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn advance_gamma<V: Vector>(
     config: &SimConfig<V>,
     walls: &Walls<V>,
@@ -1237,12 +1278,23 @@ pub(crate) fn advance_gamma<V: Vector>(
     position: &[V],
     drift: &[V],
     dt: f64,
+    continuity: Option<WallContinuity<'_>>,
 ) {
     let Some(shepard) = config.wall_model.shepard().filter(|s| s.carried) else {
         return;
     };
     let (e, g) = (&walls.elements, &walls.grid);
-    shepard.advance(&config.kernel, e, g, gamma, grad_gamma, position, drift, dt);
+    shepard.advance(
+        &config.kernel,
+        e,
+        g,
+        gamma,
+        grad_gamma,
+        position,
+        drift,
+        dt,
+        continuity,
+    );
 }
 
 /// Wall pressures, then rates, for one wall model; returns the seconds spent on the wall

@@ -1,8 +1,11 @@
 //! Explicit velocity Verlet (kick-drift-kick, extended to the density), second order, one
 //! rate evaluation per step:
 //! 1. `u* = u^n + dt/2 a^n`, `rho* = rho^n + dt/2 rhodot^n`, `r^{n+1} = r^n + dt u*`;
-//! 2. walls to `t^{n+1}`; rates `a^{n+1}, rhodot^{n+1}` at `r^{n+1}` and the predicted
-//!    `u* + dt/2 a^n`, `rho* + dt/2 rhodot^n`;
+//! 2. walls to `t^{n+1}`; the gamma the particles carry to `r^{n+1}`, and with it the walls'
+//!    part of the continuity equation of the classic walls, `rho* *= gamma^n / gamma^{n+1}`
+//!    (it is then left out of `rhodot`, see [`crate::walls::shepard::Shepard::advance`]);
+//!    rates `a^{n+1}, rhodot^{n+1}` at `r^{n+1}` and the predicted `u* + dt/2 a^n`,
+//!    `rho* + dt/2 rhodot^n`;
 //! 3. `u^{n+1} = u* + dt/2 a^{n+1}`, `rho^{n+1} = rho* + dt/2 rhodot^{n+1}`.
 //!
 //! The wall work is integrated with the trapezoidal rule of the same step.

@@ -45,6 +45,17 @@ impl WallModelChoice {
         self.shepard().is_some_and(|s| s.carried)
     }
 
+    /// `true` when the walls' part of the continuity equation is `-rho dln(gamma)/dt` of the
+    /// gamma the particles carry: the classic boundary integrals with the geometric or
+    /// integrated gamma and the element integrals `int_{S_k} W dS` (exact, or within 1e-3 by
+    /// the Gauss rule), whose sum `sum_k n_k int_{S_k} W dS` is `-grad gamma` (paper 3, eq 9).
+    /// The centre rule's sum is not, and the semi-analytical walls' vertex particles add
+    /// terms of their own.
+    pub fn wall_divergence_is_gamma_rate(&self) -> bool {
+        matches!(self, WallModelChoice::ShepardBi(kind, quadrature)
+            if *kind != ShepardKind::Discrete && *quadrature != BoundaryQuadrature::Centre)
+    }
+
     /// `true` when the walls carry vertex particles (paper 3, table 1), which also makes
     /// summation densities (eq 84) available.
     pub fn has_vertex_particles(&self) -> bool {

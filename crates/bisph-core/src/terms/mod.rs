@@ -88,6 +88,10 @@ pub struct RateModel<V: Vector> {
     /// Density by summation (paper 3, eqs 13 and 84): the sweep's density rate is then the
     /// diffusion term alone, which the integrator accumulates (see [`crate::simulation`]).
     pub summation_density: bool,
+    /// The walls' part of the continuity equation is left to the integrator, which
+    /// integrates it over each drift ([`crate::walls::shepard::Shepard::advance`]): the
+    /// renormalised velocity divergence is then the fluid sum over gamma alone.
+    pub wall_continuity_in_drift: bool,
 }
 
 /// Operators of particle `i` at the state `fluid`.
@@ -167,7 +171,12 @@ fn operators_with<V: Vector, W: WallModel<V>>(
         // Paper 1 eqs 33-34: the wall part is the renormalised total minus the fluid part.
         let scale = 1.0 / gamma;
         let total_grad = (grad_p + wall.pressure_gradient) * scale;
-        let total_div = (div_u + wall.velocity_divergence) * scale;
+        let wall_div = if model.wall_continuity_in_drift {
+            0.0
+        } else {
+            wall.velocity_divergence
+        };
+        let total_div = (div_u + wall_div) * scale;
         // Paper 3 eq 18: the Laplacian (fluid and wall sums) over gamma as well.
         let total_viscous = (viscous + wall_viscous) * scale;
         return Operators {

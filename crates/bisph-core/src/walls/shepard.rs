@@ -48,11 +48,12 @@ pub struct Shepard {
 }
 
 impl Shepard {
-    /// gamma evaluated where it is needed, or carried when integrated in time.
+    /// The discrete gamma evaluated in the sweep; the geometric and integrated ones carried
+    /// by the particles, moved with them by [`Shepard::advance`].
     pub fn of(kind: ShepardKind) -> Self {
         Shepard {
             kind,
-            carried: kind == ShepardKind::Integrated,
+            carried: kind != ShepardKind::Discrete,
         }
     }
 
@@ -94,9 +95,17 @@ impl Shepard {
             });
     }
 
-    /// Advances the carried gamma after a drift `r += u dt` (paper 3, eq 4, fixed walls):
-    /// `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (trapezoidal line integral), or
-    /// the geometric value at the new positions for [`ShepardKind::Geometric`].
+    /// Moves the carried gamma with the particles after a drift `r += u dt`: the geometric
+    /// value at the new positions (walls where they now are) for [`ShepardKind::Geometric`],
+    /// or `gamma += (grad gamma^n + grad gamma^{n+1})/2 . u dt` (paper 3, eq 4, fixed walls;
+    /// a trapezoidal line integral) for [`ShepardKind::Integrated`].
+    ///
+    /// With `continuity`, the walls' part of the continuity equation is integrated over the
+    /// drift as well: the renormalised boundary term `(rho / gamma) sum_k (u - U_k) . n_k
+    /// int_{S_k} W dS` is `-rho dln(gamma)/dt`, since `sum_k n_k int_{S_k} W dS =
+    /// -grad gamma` (paper 3, eq 9) and the walls move their elements rigidly, so
+    /// `rho *= gamma^n / gamma^{n+1}` integrates it exactly along the particle's path
+    /// ([`WallContinuity`]).
     #[allow(clippy::too_many_arguments)]
     pub fn advance<V: Vector>(
         &self,
@@ -108,20 +117,65 @@ impl Shepard {
         position: &[V],
         drift: &[V],
         dt: f64,
+        continuity: Option<WallContinuity<'_>>,
     ) {
         let integrate = self.kind == ShepardKind::Integrated;
-        gamma
+        let next = |gamma: f64, grad: &mut V, x: V, u: V| {
+            if integrate {
+                let new = usaw::grad_gamma(kernel, x, elements, grid);
+                let next = gamma + (*grad + new).dot(u) * (0.5 * dt);
+                *grad = new;
+                next
+            } else {
+                geometric_shepard::gamma(kernel, x, elements, grid)
+            }
+        };
+        let particles = gamma
             .par_iter_mut()
             .zip(grad_gamma.par_iter_mut())
-            .zip(position.par_iter().zip(drift.par_iter()))
-            .for_each(|((gamma, grad), (&x, &u))| {
-                let new = usaw::grad_gamma(kernel, x, elements, grid);
-                if integrate {
-                    *gamma += (*grad + new).dot(u) * (0.5 * dt);
-                } else {
-                    *gamma = geometric_shepard::gamma(kernel, x, elements, grid);
-                }
-                *grad = new;
-            });
+            .zip(position.par_iter().zip(drift.par_iter()));
+        match continuity {
+            None => particles.for_each(|((gamma, grad), (&x, &u))| {
+                *gamma = next(*gamma, grad, x, u);
+            }),
+            Some(WallContinuity { density, rest }) => particles
+                .zip(density.par_iter_mut())
+                .for_each(|(((gamma, grad), (&x, &u)), rho)| {
+                    let new = next(*gamma, grad, x, u);
+                    if *gamma > 0.0 && new > 0.0 {
+                        *rho = WallContinuity::compress(*rho, *gamma / new, rest);
+                    }
+                    *gamma = new;
+                }),
+        }
+    }
+}
+
+/// The walls' part of the continuity equation integrated over a drift ([`Shepard::advance`]):
+/// the densities it changes and the rest density `rho0`.
+#[derive(Debug)]
+pub struct WallContinuity<'a> {
+    /// The particles' densities.
+    pub density: &'a mut [f64],
+    /// Rest density `rho0`.
+    pub rest: f64,
+}
+
+impl WallContinuity<'_> {
+    /// `rho gamma^n / gamma^{n+1}` (`ratio = gamma^n / gamma^{n+1}`), except that walls do not
+    /// stretch water below its rest density: a particle that leaves a wall expands to `rho0`
+    /// at most, and not at all below it. The term's `-u . grad gamma / gamma` takes the
+    /// kernel support as filled with fluid, which a particle at a free surface next to a wall
+    /// (spray, a jet up a corner) is not; followed there, a particle that leaves a concave
+    /// edge (gamma 1/4) for open space (gamma 1) would fall to a quarter of its density and
+    /// be pulled back by the tension.
+    #[inline]
+    pub fn compress(rho: f64, ratio: f64, rest: f64) -> f64 {
+        let stretched = rho * ratio;
+        if ratio >= 1.0 {
+            stretched
+        } else {
+            stretched.max(rho.min(rest))
+        }
     }
 }

@@ -348,6 +348,8 @@ impl<V: Vector> SimState<V> {
         sim.restore_neighbour_list((!origin.is_empty()).then_some(origin));
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.refresh_gamma();
+        // The same bits as saved; a state saved before the geometric gamma was carried held 1.
+        sim.place_geometric_gamma();
         Ok(())
     }
 
