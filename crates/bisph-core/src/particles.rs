@@ -31,9 +31,11 @@ pub struct Fluid<V: Vector> {
     pub earlier_acceleration: Vec<V>,
     /// Density rates of the step before (see `earlier_acceleration`).
     pub earlier_density_rate: Vec<f64>,
-    /// Integrated Shepard factor `gamma_i` (paper 3, eq 4; 1 when unused).
+    /// The Shepard factor `gamma_i` the particle carries: geometric (paper 2) or integrated
+    /// (paper 3, eq 4); 1 when unused.
     pub gamma: Vec<f64>,
-    /// `grad gamma_i` at the current position (paper 3, eq 10; zero when unused).
+    /// `grad gamma_i` at the current position, for the trapezoidal step of the integrated
+    /// gamma (paper 3, eq 10; zero when unused).
     pub grad_gamma: Vec<V>,
     /// Density by summation (paper 3, eq 84): `C_i` in
     /// `gamma_i rho_i = sum_P m_j W_ij + C_i`, the accumulated diffusion (zero when unused).

@@ -521,9 +521,10 @@ impl<V: Vector> Simulation<V> {
     /// out of the rates and integrates it exactly over each drift, `rho *= gamma^n /
     /// gamma^{n+1}` ([`Shepard::advance`]): under velocity Verlet, the classic boundary
     /// integrals whose wall term is `-rho dln(gamma)/dt`
-    /// ([`WallModelChoice::wall_divergence_is_gamma_rate`]). Integrated in the rates instead, the term's
-    /// stiffness near concave edges, `c0 |grad gamma| / gamma`, would grow under the explicit
-    /// scheme's predictor.
+    /// ([`WallModelChoice::wall_divergence_is_gamma_rate`]). Taken from the rates instead, the
+    /// exchange it drives between a particle's density and its velocity across a wall, of
+    /// frequency `sqrt(2) c0 |grad gamma| / gamma` (about `6 c0 / h` in a concave edge), would
+    /// grow under the explicit scheme's predictor.
     pub(crate) fn wall_continuity_in_drift(&self) -> bool {
         self.config.integrator == Integrator::Verlet
             && self.config.wall_model.wall_divergence_is_gamma_rate()

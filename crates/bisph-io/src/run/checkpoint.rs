@@ -348,7 +348,8 @@ impl<V: Vector> SimState<V> {
         sim.restore_neighbour_list((!origin.is_empty()).then_some(origin));
         sim.walls.grid.rebuild(&sim.walls.elements.centre);
         sim.walls.refresh_gamma();
-        // The same bits as saved; a state saved before the geometric gamma was carried held 1.
+        // A function of the positions and the walls: the bits of a run never stopped, whatever
+        // the file holds for it.
         sim.place_geometric_gamma();
         Ok(())
     }
