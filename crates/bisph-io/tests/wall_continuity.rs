@@ -3,10 +3,13 @@
 //! compression by the walls a function of where it is, so a particle that meets the walls
 //! alone leaves them with the speed it came with, and at its rest density.
 
+#[allow(dead_code)]
+#[path = "support/split_runs.rs"]
+mod split_runs;
+
 use bisph_core::Simulation;
-use bisph_io::case::build_simulation;
-use bisph_io::parse_case;
 use glam::DVec2;
+use split_runs::built_from_text;
 
 /// One particle, alone in a closed box without gravity, sent from 0.05 m towards the box's
 /// corner at `velocity`; classic walls with the geometric gamma, no bounce.
@@ -38,8 +41,8 @@ shape = "box"
 min = [0.0, 0.0]
 max = [1.0, 1.0]
 "#;
-    let overrides = vec![format!("fluid_block.0.velocity={velocity}")];
-    build_simulation(&parse_case("<text>", text, &overrides).unwrap()).unwrap()
+    let velocity = format!("fluid_block.0.velocity={velocity}");
+    built_from_text(text, &[velocity.as_str()])
 }
 
 #[test]

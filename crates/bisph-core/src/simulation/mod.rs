@@ -484,7 +484,7 @@ impl<V: Vector> Simulation<V> {
     /// Which gamma the particles carry, if any.
     pub(crate) fn carried_gamma(&self) -> Option<ShepardKind> {
         let shepard = self.config.wall_model.shepard();
-        shepard.filter(|s| s.carried).map(|s| s.kind)
+        shepard.filter(Shepard::carried).map(|s| s.kind)
     }
 
     /// Sets the gamma the particles carry to the geometric value where they and the walls now
@@ -1281,7 +1281,7 @@ pub(crate) fn advance_gamma<V: Vector>(
     dt: f64,
     continuity: Option<WallContinuity<'_>>,
 ) {
-    let Some(shepard) = config.wall_model.shepard().filter(|s| s.carried) else {
+    let Some(shepard) = config.wall_model.shepard().filter(Shepard::carried) else {
         return;
     };
     let (e, g) = (&walls.elements, &walls.grid);

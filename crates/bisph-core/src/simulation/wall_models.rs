@@ -29,20 +29,17 @@ impl WallModelChoice {
         match self {
             WallModelChoice::Energy => None,
             WallModelChoice::ShepardBi(kind, _) => Some(Shepard::of(*kind)),
-            WallModelChoice::Usaw(p) => Some(Shepard {
-                kind: if p.geometric_gamma {
-                    ShepardKind::Geometric
-                } else {
-                    ShepardKind::Integrated
-                },
-                carried: true,
-            }),
+            WallModelChoice::Usaw(p) => Some(Shepard::of(if p.geometric_gamma {
+                ShepardKind::Geometric
+            } else {
+                ShepardKind::Integrated
+            })),
         }
     }
 
     /// `true` when the particles carry gamma (paper 3, eq 4).
     pub fn needs_gamma(&self) -> bool {
-        self.shepard().is_some_and(|s| s.carried)
+        self.shepard().is_some_and(|s| s.carried())
     }
 
     /// `true` when the walls' part of the continuity equation is `-rho dln(gamma)/dt` of the

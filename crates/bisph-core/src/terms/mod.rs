@@ -163,7 +163,7 @@ fn operators_with<V: Vector, W: WallModel<V>>(
         V::ZERO
     };
     let gamma = if W::RENORMALISE {
-        wall_model.renormalisation(kernel, x_i, shepard, fluid.gamma[i], elements, wall_grid)
+        wall_model.renormalisation(shepard, fluid.gamma[i])
     } else {
         1.0
     };

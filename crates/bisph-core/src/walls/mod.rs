@@ -689,18 +689,11 @@ pub trait WallModel<V: Vector>: Sync {
         Self::RENORMALISE
     }
 
-    /// The Shepard factor `gamma_i` that divides the operators of a particle at `x` when
+    /// The Shepard factor `gamma_i` that divides the operators of a particle when
     /// [`WallModel::RENORMALISE`] is set; `discrete` is `sum_j W_ij V_j` over the fluid,
-    /// `state_gamma` the particle's integrated gamma (paper 3, eq 4).
-    fn renormalisation(
-        &self,
-        _kernel: &Wendland,
-        _x: V,
-        discrete: f64,
-        _state_gamma: f64,
-        _elements: &BoundaryElements<V>,
-        _grid: &CellGrid<V>,
-    ) -> f64 {
+    /// `state_gamma` the gamma the particle carries (geometric, paper 2; or integrated,
+    /// paper 3, eq 4).
+    fn renormalisation(&self, discrete: f64, _state_gamma: f64) -> f64 {
         discrete
     }
 

@@ -36,42 +36,33 @@ impl std::str::FromStr for ShepardKind {
     }
 }
 
-/// The Shepard strategy of a renormalised wall model: which `gamma_i` divides the operators,
-/// and whether the particles carry it (set at time zero by [`Shepard::initialise`] and moved
-/// with them by [`Shepard::advance`]) or it is evaluated where it is needed.
+/// The Shepard strategy of a renormalised wall model: which `gamma_i` divides the operators.
+/// The discrete gamma is evaluated in the sweep; the particles carry the geometric and the
+/// integrated ones (set at time zero by [`Shepard::initialise`] and moved with them by
+/// [`Shepard::advance`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Shepard {
     /// Which gamma.
     pub kind: ShepardKind,
-    /// The particles carry gamma and `grad gamma` (paper 3, eqs 4 and 10).
-    pub carried: bool,
 }
 
 impl Shepard {
-    /// The discrete gamma evaluated in the sweep; the geometric and integrated ones carried
-    /// by the particles, moved with them by [`Shepard::advance`].
+    /// The strategy of `kind`.
     pub fn of(kind: ShepardKind) -> Self {
-        Shepard {
-            kind,
-            carried: kind != ShepardKind::Discrete,
-        }
+        Shepard { kind }
     }
 
-    /// The `gamma_i` that divides the operators of a particle at `x` (paper 1, eqs 24-25):
+    /// `true` when the particles carry gamma (all but the discrete one).
+    pub fn carried(&self) -> bool {
+        self.kind != ShepardKind::Discrete
+    }
+
+    /// The `gamma_i` that divides the operators of a particle (paper 1, eqs 24-25):
     /// `discrete` is `sum_j W_ij V_j` over the fluid, `carried` the particle's own gamma.
-    pub fn gamma<V: Vector>(
-        &self,
-        kernel: &Wendland,
-        x: V,
-        discrete: f64,
-        carried: f64,
-        elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
-    ) -> f64 {
-        match (self.carried, self.kind) {
-            (true, _) | (false, ShepardKind::Integrated) => carried,
-            (false, ShepardKind::Discrete) => discrete,
-            (false, ShepardKind::Geometric) => geometric_shepard::gamma(kernel, x, elements, grid),
+    pub fn gamma(&self, discrete: f64, carried: f64) -> f64 {
+        match self.kind {
+            ShepardKind::Discrete => discrete,
+            ShepardKind::Geometric | ShepardKind::Integrated => carried,
         }
     }
 

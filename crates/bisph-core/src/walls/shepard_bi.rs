@@ -91,17 +91,8 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         self.shepard == Shepard::of(ShepardKind::Discrete)
     }
 
-    fn renormalisation(
-        &self,
-        kernel: &Wendland,
-        x: V,
-        discrete: f64,
-        state_gamma: f64,
-        elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
-    ) -> f64 {
-        self.shepard
-            .gamma(kernel, x, discrete, state_gamma, elements, grid)
+    fn renormalisation(&self, discrete: f64, state_gamma: f64) -> f64 {
+        self.shepard.gamma(discrete, state_gamma)
     }
 
     #[inline(always)]

@@ -16,7 +16,7 @@ pub fn built<V: CaseDim>(name: &str, overrides: &[&str]) -> Simulation<V> {
 }
 
 /// The case `text` with `overrides`, built.
-fn built_from_text<V: CaseDim>(text: &str, overrides: &[&str]) -> Simulation<V> {
+pub fn built_from_text<V: CaseDim>(text: &str, overrides: &[&str]) -> Simulation<V> {
     let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
     build_simulation(&parse_case("<text>", text, &overrides).unwrap()).unwrap()
 }

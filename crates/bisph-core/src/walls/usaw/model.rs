@@ -296,15 +296,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         }
     }
 
-    fn renormalisation(
-        &self,
-        _kernel: &Wendland,
-        _x: V,
-        _discrete: f64,
-        state_gamma: f64,
-        _elements: &BoundaryElements<V>,
-        _grid: &CellGrid<V>,
-    ) -> f64 {
+    fn renormalisation(&self, _discrete: f64, state_gamma: f64) -> f64 {
         state_gamma
     }
 
