@@ -231,43 +231,59 @@ fn one_and_two_threads_give_identical_outputs() {
     );
 }
 
+/// The outputs (energy, bodies, midpoint series) of the adiabatic piston on `threads`
+/// threads, with the extra `--set` overrides.
+fn piston_outputs(threads: &str, overrides: &[&str]) -> (String, String, String) {
+    let case = cases_dir().join("adiabatic-piston.toml");
+    let dir = temp_dir(&format!("piston-threads{threads}-{}", overrides.len()));
+    let mut args = vec![
+        "run",
+        case.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--threads",
+        threads,
+        "--quiet",
+        "--set",
+        "resolution.dx=0.066",
+        "--set",
+        "resolution.h_over_dx=2.0",
+        "--set",
+        "time.end=2.0",
+        "--set",
+        "output.vtk_interval=0",
+    ];
+    for o in overrides {
+        args.extend(["--set", o]);
+    }
+    let out = bisph(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let energy = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
+    let bodies = std::fs::read_to_string(dir.join("bodies.csv")).unwrap();
+    let midpoint = std::fs::read_to_string(dir.join("midpoint.csv")).unwrap();
+    assert!(midpoint.lines().count() > 10);
+    (energy, bodies, midpoint)
+}
+
 /// The midpoint integrator with a piston body is deterministic across thread counts too.
 #[test]
 fn midpoint_with_piston_is_thread_count_independent() {
-    let case = cases_dir().join("adiabatic-piston.toml");
-    let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
-        let dir = temp_dir(&format!("piston-threads{threads}"));
-        let out = bisph(&[
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-            "--threads",
-            threads,
-            "--quiet",
-            "--set",
-            "resolution.dx=0.066",
-            "--set",
-            "resolution.h_over_dx=2.0",
-            "--set",
-            "time.end=2.0",
-            "--set",
-            "output.vtk_interval=0",
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let energy = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
-        let bodies = std::fs::read_to_string(dir.join("bodies.csv")).unwrap();
-        let midpoint = std::fs::read_to_string(dir.join("midpoint.csv")).unwrap();
-        assert!(midpoint.lines().count() > 10);
-        outputs.push((energy, bodies, midpoint));
-    }
     assert!(
-        outputs[0] == outputs[1],
+        piston_outputs("1", &[]) == piston_outputs("2", &[]),
+        "outputs differ between 1 and 2 threads"
+    );
+}
+
+/// So is Anderson's mixing of its iterations, whose inner products are sums over all particles.
+#[test]
+fn anderson_mixing_is_thread_count_independent() {
+    let mixed = ["midpoint.anderson_depth=3"];
+    assert!(
+        piston_outputs("1", &mixed) == piston_outputs("2", &mixed),
         "outputs differ between 1 and 2 threads"
     );
 }

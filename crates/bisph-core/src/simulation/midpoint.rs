@@ -14,7 +14,8 @@
 //!    `f <- inc + (1 - inc) f` whenever `R` fails to fall by the factor
 //!    `f + (1 - f) min_decrease` (the rate `min_decrease` of the paper, less the slowing the
 //!    relaxation itself causes), and is zero on the last pass; stop when `R < tolerance` or
-//!    after `max_iterations`.
+//!    after `max_iterations`. With `anderson_depth > 0`, Anderson's mixing of the last
+//!    iterations ([`super::anderson`]) takes the place of the relaxation.
 //!
 //! Then `u^{n+1} = u^n + dt a`, `r^{n+1} = r^n + dt (u^n + u^{n+1}) / 2`,
 //! `rho^{n+1} = rho^n + dt rhodot`. Dynamic bodies (pistons and free rigid bodies) iterate
@@ -28,6 +29,7 @@
 //! change, the wall work and the bodies' kinetic + gravity energy balance exactly, up to the
 //! midpoint rule of the compression energy.
 
+use super::anderson::{Anderson, InnerProduct, RatesView};
 use super::settings::MidpointParams;
 use super::Simulation;
 use crate::dim::Vector;
@@ -54,6 +56,12 @@ impl<V: Vector> Simulation<V> {
         let mut iterations = 0;
         let mut residue = 0.0;
         self.extrapolate_rates(dt);
+        let depth = params.anderson_depth as usize;
+        let mut anderson = std::mem::take(&mut self.scratch.anderson);
+        if anderson.depth() != depth {
+            anderson = Anderson::new(depth);
+        }
+        anderson.restart();
         // Positions and grid stay frozen through the iterations: list the pairs once.
         if params.max_iterations > 1 {
             self.list_pairs();
@@ -95,7 +103,17 @@ impl<V: Vector> Simulation<V> {
                 relaxation = 0.0;
             }
             previous_residue = residue;
-            if relaxation > 0.0 {
+            let last = m + 1 == params.max_iterations.max(1);
+            if depth > 0 {
+                if !converged && !last {
+                    self.accelerate(
+                        &mut anderson,
+                        &mut body_acceleration,
+                        &body_previous,
+                        &body_inertia,
+                    );
+                }
+            } else if relaxation > 0.0 {
                 self.relax_rates(relaxation, &mut body_acceleration, &body_previous);
             }
             self.walls.set_dynamic_accelerations(&body_acceleration);
@@ -103,6 +121,7 @@ impl<V: Vector> Simulation<V> {
                 break;
             }
         }
+        self.scratch.anderson = anderson;
         self.forget_pairs();
         self.last_iterations = iterations;
         self.last_residue = residue;
@@ -209,6 +228,41 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
+    /// The next guess of the rates by Anderson's mixing of the iterations so far
+    /// ([`super::anderson`]): the fluid's rates (the evaluation) and `body_acceleration` are
+    /// overwritten, the guess they were evaluated at being in the scratch buffers and
+    /// `body_previous`.
+    fn accelerate(
+        &mut self,
+        anderson: &mut Anderson<V>,
+        body_acceleration: &mut [f64],
+        body_previous: &[f64],
+        body_inertia: &[f64],
+    ) {
+        let mut acceleration = std::mem::take(&mut self.fluid.acceleration);
+        let mut density_rate = std::mem::take(&mut self.fluid.density_rate);
+        let eos = self.config.eos;
+        let scale = eos.c0() / eos.rho0();
+        let product = MidpointNorm {
+            sim: self,
+            density_weight: scale * scale,
+            body_inertia,
+        };
+        let s = &self.scratch;
+        let x = RatesView {
+            acceleration: &s.previous_acceleration,
+            density_rate: &s.previous_density_rate,
+            body: body_previous,
+        };
+        anderson.next_guess(
+            x,
+            (&mut acceleration, &mut density_rate, body_acceleration),
+            &product,
+        );
+        self.fluid.acceleration = acceleration;
+        self.fluid.density_rate = density_rate;
+    }
+
     /// First guess of the rates at `t^{n+1/2}`: linear extrapolation from the converged
     /// rates of the last two steps (at `t^{n-1/2}` and `t^{n-3/2}`); keeps the rates of the
     /// last step as the earlier ones for the next step.
@@ -254,5 +308,33 @@ impl<V: Vector> Simulation<V> {
                         * (f.density_rate[i] - s.previous_density_rate[i]))
                         .abs())
         })
+    }
+}
+
+/// The weighted inner product of [`super::anderson`]: particle masses, density rates in the
+/// units of accelerations (`c0 / rho0`), bodies by their generalised inertias; the fluid's
+/// part summed exactly over the own particles of every part.
+struct MidpointNorm<'a, V: Vector> {
+    sim: &'a Simulation<V>,
+    density_weight: f64,
+    body_inertia: &'a [f64],
+}
+
+impl<V: Vector> InnerProduct<V> for MidpointNorm<'_, V> {
+    fn inner(&self, y: RatesView<'_, V>, z: RatesView<'_, V>) -> f64 {
+        let mass = &self.sim.fluid.mass;
+        let w = self.density_weight;
+        let fluid = self.sim.sum_owned(|i| {
+            mass[i]
+                * (y.acceleration[i].dot(z.acceleration[i])
+                    + w * y.density_rate[i] * z.density_rate[i])
+        });
+        let bodies: f64 = self
+            .body_inertia
+            .iter()
+            .zip(y.body.iter().zip(z.body))
+            .map(|(i, (a, b))| i * a * b)
+            .sum();
+        fluid + bodies
     }
 }

@@ -2,6 +2,7 @@
 //! integrators: explicit velocity Verlet ([`verlet`]) or the semi-implicit midpoint scheme
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
+mod anderson;
 mod leaving;
 mod midpoint;
 mod part;
@@ -154,6 +155,8 @@ struct Scratch<V> {
     lost_energy: Vec<f64>,
     previous_acceleration: Vec<V>,
     previous_density_rate: Vec<f64>,
+    /// The history of the midpoint iterations of the current step.
+    anderson: anderson::Anderson<V>,
     drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
     /// The fluid pairs of the current positions, with kernel gradient factors, while

@@ -14,6 +14,9 @@ pub struct MidpointParams {
     pub relax_increment: f64,
     /// Relaxation at the start of a step `f0` (0: none).
     pub initial_relaxation: f64,
+    /// Differences of past iterations that Anderson's mixing uses (0: the plain or relaxed
+    /// iteration; see [`super::anderson`]).
+    pub anderson_depth: u32,
 }
 
 impl Default for MidpointParams {
@@ -24,6 +27,7 @@ impl Default for MidpointParams {
             min_decrease: 0.2,
             relax_increment: 0.25,
             initial_relaxation: 0.0,
+            anderson_depth: 0,
         }
     }
 }

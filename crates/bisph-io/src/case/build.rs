@@ -574,6 +574,7 @@ fn integrator_of<V: CaseDim>(case: &Case, fluid: &Fluid<V>, eos: &Eos, gravity: 
                 min_decrease: m.min_decrease,
                 relax_increment: m.relax_increment,
                 initial_relaxation: m.initial_relaxation,
+                anderson_depth: m.anderson_depth,
             })
         }
     }

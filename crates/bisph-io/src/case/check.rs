@@ -128,6 +128,12 @@ fn check_midpoint(loaded: &LoadedCase) -> Result<(), CaseError> {
             format!("expected 1 to 1000, found {}", mp.max_iterations),
         ));
     }
+    if mp.anderson_depth > 10 {
+        return Err(loaded.error(
+            "midpoint.anderson_depth",
+            format!("expected 0 to 10, found {}", mp.anderson_depth),
+        ));
+    }
     if mp.tolerance.is_nan() || mp.tolerance < 0.0 {
         return Err(loaded.error(
             "midpoint.tolerance",

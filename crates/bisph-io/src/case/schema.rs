@@ -436,6 +436,9 @@ pub struct MidpointSection {
     /// Relaxation at the start of each step.
     #[serde(default)]
     pub initial_relaxation: f64,
+    /// Past iterations Anderson's mixing combines (0: the plain or relaxed iteration).
+    #[serde(default = "default_anderson_depth")]
+    pub anderson_depth: u32,
 }
 
 fn default_iterations() -> u32 {
@@ -446,6 +449,9 @@ fn default_min_decrease() -> f64 {
 }
 fn default_relax_increment() -> f64 {
     0.25
+}
+fn default_anderson_depth() -> u32 {
+    0
 }
 
 impl Default for MidpointSection {
@@ -458,6 +464,7 @@ impl Default for MidpointSection {
             min_decrease: default_min_decrease(),
             relax_increment: default_relax_increment(),
             initial_relaxation: 0.0,
+            anderson_depth: default_anderson_depth(),
         }
     }
 }
