@@ -11,17 +11,18 @@
 //! the same; only the number of evaluations to reach it changes. The norm weighs each
 //! particle by its mass and puts the density rates in the units of an acceleration,
 //! `|y|^2 = sum_i m_i (|y_a,i|^2 + (c0 / rho0)^2 y_rhodot,i^2) + sum_k I_k y_A,k^2`, with
-//! `I_k` the bodies' generalised inertias, as the residue of paper 1, eq 53 does.
+//! `I_k` the bodies' generalised inertias (the residue of paper 1, eq 53, weighs particles by
+//! their mass too).
 
 use crate::dim::Vector;
 use std::collections::VecDeque;
 
 /// One vector of rates of the midpoint iterations.
 #[derive(Clone, Debug, Default)]
-pub(super) struct Rates<V> {
-    pub acceleration: Vec<V>,
-    pub density_rate: Vec<f64>,
-    pub body: Vec<f64>,
+struct Rates<V> {
+    acceleration: Vec<V>,
+    density_rate: Vec<f64>,
+    body: Vec<f64>,
 }
 
 impl<V: Vector> Rates<V> {
