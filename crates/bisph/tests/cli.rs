@@ -192,50 +192,17 @@ fn malformed_cases_give_named_errors() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
 }
 
-/// Gather loops and ordered reductions: the thread count must not change a single bit.
-#[test]
-fn one_and_two_threads_give_identical_outputs() {
-    let case = cases_dir().join("dam-break-2d.toml");
-    let mut outputs = Vec::new();
-    for threads in ["1", "2"] {
-        let dir = temp_dir(&format!("threads{threads}"));
-        let out = bisph(&[
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-            "--threads",
-            threads,
-            "--quiet",
-            "--set",
-            "resolution.dx=0.02",
-            "--set",
-            "time.end=0.1",
-            "--set",
-            "output.vtk_interval=0",
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let energy = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
-        let probes = std::fs::read_to_string(dir.join("probes.csv")).unwrap();
-        let forces = std::fs::read_to_string(dir.join("forces.csv")).unwrap();
-        assert!(energy.lines().count() > 50);
-        outputs.push((energy, probes, forces));
-    }
-    assert!(
-        outputs[0] == outputs[1],
-        "outputs differ between 1 and 2 threads"
-    );
-}
-
-/// The outputs (energy, bodies, midpoint series) of the adiabatic piston on `threads`
-/// threads, with the extra `--set` overrides.
-fn piston_outputs(threads: &str, overrides: &[&str]) -> (String, String, String) {
-    let case = cases_dir().join("adiabatic-piston.toml");
-    let dir = temp_dir(&format!("piston-threads{threads}-{}", overrides.len()));
+/// The contents of the output `files` of the case `case` run on `threads` threads with the
+/// `--set` overrides `sets` (into a folder named after `label` and the thread count).
+fn run_outputs(
+    case: &str,
+    label: &str,
+    threads: &str,
+    sets: &[&str],
+    files: &[&str],
+) -> Vec<String> {
+    let case = cases_dir().join(case);
+    let dir = temp_dir(&format!("{label}-threads{threads}"));
     let mut args = vec![
         "run",
         case.to_str().unwrap(),
@@ -244,17 +211,9 @@ fn piston_outputs(threads: &str, overrides: &[&str]) -> (String, String, String)
         "--threads",
         threads,
         "--quiet",
-        "--set",
-        "resolution.dx=0.066",
-        "--set",
-        "resolution.h_over_dx=2.0",
-        "--set",
-        "time.end=2.0",
-        "--set",
-        "output.vtk_interval=0",
     ];
-    for o in overrides {
-        args.extend(["--set", o]);
+    for s in sets {
+        args.extend(["--set", s]);
     }
     let out = bisph(&args);
     assert!(
@@ -262,18 +221,52 @@ fn piston_outputs(threads: &str, overrides: &[&str]) -> (String, String, String)
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let energy = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
-    let bodies = std::fs::read_to_string(dir.join("bodies.csv")).unwrap();
-    let midpoint = std::fs::read_to_string(dir.join("midpoint.csv")).unwrap();
-    assert!(midpoint.lines().count() > 10);
-    (energy, bodies, midpoint)
+    files
+        .iter()
+        .map(|f| std::fs::read_to_string(dir.join(f)).unwrap())
+        .collect()
+}
+
+/// Gather loops and ordered reductions: the thread count must not change a single bit.
+#[test]
+fn one_and_two_threads_give_identical_outputs() {
+    let sets = [
+        "resolution.dx=0.02",
+        "time.end=0.1",
+        "output.vtk_interval=0",
+    ];
+    let files = ["energy.csv", "probes.csv", "forces.csv"];
+    let outputs: Vec<_> = ["1", "2"]
+        .map(|t| run_outputs("dam-break-2d.toml", "dam", t, &sets, &files))
+        .into();
+    assert!(outputs[0][0].lines().count() > 50);
+    assert!(
+        outputs[0] == outputs[1],
+        "outputs differ between 1 and 2 threads"
+    );
+}
+
+/// The outputs (energy, bodies, midpoint series) of the adiabatic piston on `threads`
+/// threads, with the extra `--set` overrides.
+fn piston_outputs(label: &str, threads: &str, overrides: &[&str]) -> Vec<String> {
+    let mut sets = vec![
+        "resolution.dx=0.066",
+        "resolution.h_over_dx=2.0",
+        "time.end=2.0",
+        "output.vtk_interval=0",
+    ];
+    sets.extend_from_slice(overrides);
+    let files = ["energy.csv", "bodies.csv", "midpoint.csv"];
+    let outputs = run_outputs("adiabatic-piston.toml", label, threads, &sets, &files);
+    assert!(outputs[2].lines().count() > 10);
+    outputs
 }
 
 /// The midpoint integrator with a piston body is deterministic across thread counts too.
 #[test]
 fn midpoint_with_piston_is_thread_count_independent() {
     assert!(
-        piston_outputs("1", &[]) == piston_outputs("2", &[]),
+        piston_outputs("piston", "1", &[]) == piston_outputs("piston", "2", &[]),
         "outputs differ between 1 and 2 threads"
     );
 }
@@ -283,7 +276,7 @@ fn midpoint_with_piston_is_thread_count_independent() {
 fn anderson_mixing_is_thread_count_independent() {
     let mixed = ["midpoint.anderson_depth=3"];
     assert!(
-        piston_outputs("1", &mixed) == piston_outputs("2", &mixed),
+        piston_outputs("anderson", "1", &mixed) == piston_outputs("anderson", "2", &mixed),
         "outputs differ between 1 and 2 threads"
     );
 }
