@@ -7,9 +7,7 @@ use bisph_core::geometry::{box_elements_2d, box_elements_3d, polyline_elements, 
 use bisph_core::kernel::Wendland;
 use bisph_core::neighbours::{CellGrid, PairList};
 use bisph_core::particles::FluidState;
-use bisph_core::terms::{
-    particle_operators, DensityDiffusion, DiffusionForm, FluidNeighbours, RateModel,
-};
+use bisph_core::terms::{particle_operators, DensityDiffusion, DiffusionForm, Gather, RateModel};
 use bisph_core::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
 use bisph_core::walls::BoundaryElements;
 use bisph_core::Vector;
@@ -138,7 +136,7 @@ fn powers<V: Vector>(
             &model,
             &EnergyConservingWalls,
             &view,
-            FluidNeighbours::Grid(&grid),
+            Gather::Grid(&grid),
             elements,
             &wall_grid,
             i,
@@ -147,7 +145,7 @@ fn powers<V: Vector>(
             &model,
             &EnergyConservingWalls,
             &view,
-            FluidNeighbours::List(&pairs),
+            Gather::List(&pairs),
             elements,
             &wall_grid,
             i,

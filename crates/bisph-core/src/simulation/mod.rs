@@ -3,6 +3,7 @@
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
 mod anderson;
+mod kept_neighbours;
 mod leaving;
 mod midpoint;
 mod part;
@@ -23,18 +24,19 @@ use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::{CandidateList, CellGrid, PairList, Periodicity};
+use crate::neighbours::{CellGrid, PairList, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
     compute_rates, particle_operators, DensityDiffusion, DiffusionForm, DissipationRates,
-    FluidNeighbours, RateModel, Viscosity,
+    FluidNeighbours, FluidSums, Gather, RateModel, Viscosity,
 };
 use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::{Shepard, ShepardKind, WallContinuity};
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
+use kept_neighbours::KeptNeighbours;
 use part_state::{BadParticle, Fault, HaloFields, Part};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -171,7 +173,9 @@ struct Scratch<V> {
     wall_pairs_listed: bool,
     /// The Verlet list (see [`SimConfig::neighbour_skin`]), valid while `candidates_valid`
     /// and no particle moved more than `skin / 2` since its build.
-    candidates: CandidateList<V>,
+    candidates: KeptNeighbours<V>,
+    /// The fluid sums of a sweep over the Verlet list's pairs.
+    pair_sums: Vec<FluidSums<V>>,
     candidates_valid: bool,
     /// The list was checked for the current positions: the next rate evaluation reads it.
     use_candidates: bool,
@@ -739,7 +743,9 @@ impl<V: Vector> Simulation<V> {
         let radius = self.config.kernel.support + skin;
         // A part lists its own particles' candidates: the halo takes the owners' rates.
         let queries = self.owned_len();
-        self.scratch.candidates.rebuild_for(
+        let pairs = self.config.integrator == Integrator::Verlet;
+        self.scratch.candidates.rebuild(
+            pairs,
             &self.fluid_grid,
             &self.fluid.position,
             queries,
@@ -812,9 +818,10 @@ impl<V: Vector> Simulation<V> {
         self.fluid_grid.rebuild_keyed(origin, &self.fluid.id);
         let radius = self.config.kernel.support + skin;
         let queries = self.owned_len();
+        let pairs = self.config.integrator == Integrator::Verlet;
         self.scratch
             .candidates
-            .rebuild_for(&self.fluid_grid, origin, queries, radius);
+            .rebuild(pairs, &self.fluid_grid, origin, queries, radius);
         self.scratch.candidates_valid = true;
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
@@ -844,8 +851,11 @@ impl<V: Vector> Simulation<V> {
         let position = &self.fluid.position;
         let factor = |r| kernel.gradient_factor(r);
         let s = &mut self.scratch;
-        if s.skin > 0.0 && s.candidates_valid && s.candidates.holds(position, 0.5 * s.skin) {
-            let candidates = &s.candidates;
+        let candidates = match &s.candidates {
+            KeptNeighbours::Candidates(list) if s.skin > 0.0 && s.candidates_valid => Some(list),
+            _ => None,
+        };
+        if let Some(candidates) = candidates.filter(|c| c.holds(position, 0.5 * s.skin)) {
             s.pairs
                 .rebuild_from_candidates(candidates, position, kernel.support, factor);
         } else {
@@ -936,11 +946,16 @@ impl<V: Vector> Simulation<V> {
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         let neighbours = if self.scratch.pairs_listed {
-            FluidNeighbours::List(&self.scratch.pairs)
+            FluidNeighbours::Gather(Gather::List(&self.scratch.pairs))
         } else if self.scratch.use_candidates {
-            FluidNeighbours::Candidates(&self.scratch.candidates)
+            match &self.scratch.candidates {
+                KeptNeighbours::Candidates(list) => {
+                    FluidNeighbours::Gather(Gather::Candidates(list))
+                }
+                KeptNeighbours::Pairs(list) => FluidNeighbours::Pairs(list),
+            }
         } else {
-            FluidNeighbours::Grid(grid)
+            FluidNeighbours::Gather(Gather::Grid(grid))
         };
         // The vertex values of the semi-analytical walls first (their pressures are the
         // segments' wall pressures).
@@ -979,6 +994,7 @@ impl<V: Vector> Simulation<V> {
             acceleration: &mut acceleration[..owned],
             density_rate: &mut density_rate[..owned],
             dissipation: &mut dissipation[..owned],
+            pair_sums: &mut self.scratch.pair_sums,
         };
         self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
         let d = &self.scratch.dissipation;
@@ -1313,6 +1329,7 @@ struct Sweep<'a, V: Vector> {
     acceleration: &'a mut [V],
     density_rate: &'a mut [f64],
     dissipation: &'a mut [DissipationRates],
+    pair_sums: &'a mut Vec<FluidSums<V>>,
 }
 
 impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
@@ -1333,6 +1350,7 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
             self.acceleration,
             self.density_rate,
             self.dissipation,
+            self.pair_sums,
         );
         wall_seconds
     }
@@ -1360,7 +1378,7 @@ impl<V: Vector> WallModelTask<V> for SkewResidual<'_, V> {
                     self.model,
                     wall_model,
                     state,
-                    FluidNeighbours::Grid(self.fluid_grid),
+                    Gather::Grid(self.fluid_grid),
                     self.elements,
                     self.wall_grid,
                     i,

@@ -394,20 +394,16 @@ impl<V: Vector> Simulation<V> {
     }
 
     /// The work of each of the first `n` particles, the weights of the bisection: one plus
-    /// its candidates in the Verlet list in use (the pairs a sweep visits), or one without a
+    /// its pairs in the Verlet list in use (the pairs a sweep visits), or one without a
     /// list. Whole numbers, so their sums are exact.
     fn work_weights(&self, n: usize) -> Vec<f64> {
         let s = &self.scratch;
-        let listed = s.candidates_valid && s.skin > 0.0;
-        (0..n)
-            .map(|i| {
-                1.0 + if listed {
-                    s.candidates.count(i) as f64
-                } else {
-                    0.0
-                }
-            })
-            .collect()
+        if s.candidates_valid && s.skin > 0.0 {
+            let counts = s.candidates.counts(n);
+            counts.into_iter().map(|c| 1.0 + c as f64).collect()
+        } else {
+            vec![1.0; n]
+        }
     }
 
     /// Cuts the regions again, by recursive coordinate bisection of every part's own particles

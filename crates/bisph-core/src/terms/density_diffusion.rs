@@ -55,19 +55,37 @@ impl<V: Vector> DensityDiffusion<V> {
         gradient_factor: f64,
         volume_j: f64,
     ) -> f64 {
+        self.pair_sides(rho_i, rho_j, r_ij, r, gradient_factor, [0.0, volume_j])
+            .0
+    }
+
+    /// One pair's contributions to both particles, `(to i, to j)`, with `volume = [V_i, V_j]`:
+    /// `rho~_ji = -rho~_ij`, so the term is antisymmetric (`V_i D_i = -V_j D_j` pair by pair,
+    /// each the bits its own particle's sum would add).
+    #[inline(always)]
+    pub fn pair_sides(
+        &self,
+        rho_i: f64,
+        rho_j: f64,
+        r_ij: V,
+        r: f64,
+        gradient_factor: f64,
+        volume: [f64; 2],
+    ) -> (f64, f64) {
         // excess = -rho~_ij = (rho_j - rho_i) - (rho_j^H - rho_i^H).
         let mut hydrostatic = self.hydrostatic_gradient.dot(r_ij);
         if hydrostatic != 0.0 {
             hydrostatic *= self.eos.hydrostatic_density_factor(0.5 * (rho_i + rho_j));
         }
         let excess = (rho_j - rho_i) - hydrostatic;
-        match self.form {
-            DiffusionForm::Laplacian => -2.0 * self.scale * excess * gradient_factor * volume_j,
+        let e = match self.form {
+            DiffusionForm::Laplacian => -2.0 * self.scale * excess * gradient_factor,
             DiffusionForm::Riemann(eos) => {
                 let c = eos.sound_speed(rho_i).max(eos.sound_speed(rho_j));
-                -self.scale * c * excess * gradient_factor * r * volume_j
+                -self.scale * c * excess * gradient_factor * r
             }
-        }
+        };
+        (e * volume[1], -(e * volume[0]))
     }
 }
 

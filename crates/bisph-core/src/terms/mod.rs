@@ -1,8 +1,10 @@
 //! Physical terms and the sweep that turns a fluid state into rates.
 //!
-//! Each term lives in its own file as a pair function; [`compute_rates`] fuses them into one
-//! gather loop per particle (each particle sums its own neighbours, so the result does not
-//! depend on the number of threads) and asks the wall model for the wall parts:
+//! Each term lives in its own file as a pair function that gives both particles' shares;
+//! [`compute_rates`] fuses them into one pair loop and asks the wall model for the wall parts.
+//! Each particle either sums its own neighbours (a gather, [`Gather`]) or receives the shares
+//! of pairs evaluated once for both particles ([`PairBlocks`]); in both the order of each
+//! particle's sum depends neither on the number of threads nor on the parts of a split run:
 //! - momentum, paper 1 eq 2: `du_i/dt = -(<grad p>_i^Omega + <grad p>_i^{dOmega}) / rho_i + g`,
 //!   plus the laminar viscosity of paper 3 eq 18 with its wall shear ([`viscosity`]) and a
 //!   uniform driving body force (the flux control of paper 3, section 5);
@@ -15,7 +17,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CandidateList, CellGrid, KeptBlock, PairList};
+use crate::neighbours::{CandidateList, CellGrid, KeptBlock, PairBlocks, PairList};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -51,22 +53,34 @@ pub struct DissipationRates {
     pub diffusion: f64,
 }
 
-/// Where the fluid sums find each particle's fluid neighbours. Both give the same neighbours
-/// in the same order with the same `r_ij` and kernel gradient factors, so the sums agree to
-/// the bit; one pair loop serves both ([`fluid_sums`]).
+/// Where a particle finds its own fluid neighbours, to sum them itself. Both give the same
+/// neighbours in the same order with the same `r_ij` and kernel gradient factors, so the sums
+/// agree to the bit; one pair loop serves both ([`fluid_sums`]).
 #[derive(Clone, Copy, Debug)]
-pub enum FluidNeighbours<'a, V: Vector> {
+pub enum Gather<'a, V: Vector> {
     /// Searched in the cell grid of the fluid at every evaluation.
     Grid(&'a CellGrid<V>),
     /// Read from a list made by [`PairList::rebuild`] over the same grid and positions, with
     /// the kernel gradient factor as its per-pair factor (the iterations of a midpoint step,
     /// where the positions are frozen).
     List(&'a PairList<V>),
-    /// Filtered from the candidates of an explicit step's Verlet list ([`CandidateList`],
-    /// still valid for the positions): the same neighbours, in the list's order (the storage
-    /// order when it was built), so sums may differ from the grid's in the last bits (and
-    /// `r_ij` too across periodic axes, where it is the minimum image).
+    /// Filtered from the candidates of a Verlet list ([`CandidateList`], still valid for the
+    /// positions): the same neighbours, in the list's order (the storage order when it was
+    /// built), so sums may differ from the grid's in the last bits (and `r_ij` too across
+    /// periodic axes, where it is the minimum image).
     Candidates(&'a CandidateList<V>),
+}
+
+/// How a sweep meets the fluid pairs.
+#[derive(Clone, Copy, Debug)]
+pub enum FluidNeighbours<'a, V: Vector> {
+    /// Each particle sums its own neighbours.
+    Gather(Gather<'a, V>),
+    /// Each pair of an explicit step's Verlet list ([`PairBlocks`], still valid for the
+    /// positions) is evaluated once and its shares added to both particles: the same pairs,
+    /// each particle's in the list's order, so sums may differ from a gather's in the last
+    /// bits (and `r_ij` too across periodic axes, where it is the minimum image).
+    Pairs(&'a PairBlocks<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -94,29 +108,58 @@ pub struct RateModel<V: Vector> {
     pub wall_continuity_in_drift: bool,
 }
 
-/// Operators of particle `i` at the state `fluid`.
+/// Calls `f::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(args)` with the switches `[weighted,
+/// diffuse, viscid, shepard]` turned into constants, so that the pair loop of each
+/// combination carries no test of them.
+macro_rules! with_switches {
+    ($switches:expr, $f:ident $args:tt) => {
+        with_switches!(@arms $switches, $f $args;
+            false false false false, false false false true, false false true false,
+            false false true true, false true false false, false true false true,
+            false true true false, false true true true, true false false false,
+            true false false true, true false true false, true false true true,
+            true true false false, true true false true, true true true false, true true true true)
+    };
+    (@arms $switches:expr, $f:ident $args:tt; $($w:literal $d:literal $v:literal $s:literal),*) => {
+        match $switches {
+            $([$w, $d, $v, $s] => $f::<_, $w, $d, $v, $s> $args,)*
+        }
+    };
+}
+
+/// Operators of particle `i` at the state `fluid`, its neighbours gathered by `neighbours`.
 pub fn particle_operators<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    neighbours: FluidNeighbours<'_, V>,
+    neighbours: Gather<'_, V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     i: usize,
 ) -> Operators<V> {
     let mut kept = KeptBlock::new();
-    let walls = (wall_model, elements, wall_grid);
-    operators_with(model, walls, fluid, neighbours, &mut kept, i)
+    let switches = sum_switches(model, wall_model);
+    let sums = with_switches!(switches, fluid_sums(model, fluid, neighbours, &mut kept, i));
+    operators_with(model, (wall_model, elements, wall_grid), fluid, &sums, i)
 }
 
-/// [`particle_operators`] with the neighbour filter's buffers `kept` of the calling task.
+/// Which fluid sums a sweep adds: `[weighted, diffuse, viscid, shepard]`.
+fn sum_switches<V: Vector, W: WallModel<V>>(model: &RateModel<V>, wall_model: &W) -> [bool; 4] {
+    [
+        model.density_power != 0,
+        model.diffusion.scale != 0.0,
+        model.viscosity.active(),
+        W::RENORMALISE && wall_model.needs_discrete_shepard(),
+    ]
+}
+
+/// The operators of particle `i` from its fluid sums `sums` and the wall model's terms.
 #[inline(always)]
 fn operators_with<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     (wall_model, elements, wall_grid): (&W, &BoundaryElements<V>, &CellGrid<V>),
     fluid: &FluidState<V>,
-    neighbours: FluidNeighbours<'_, V>,
-    kept: &mut KeptBlock<V>,
+    sums: &FluidSums<V>,
     i: usize,
 ) -> Operators<V> {
     let kernel = &model.kernel;
@@ -128,27 +171,13 @@ fn operators_with<V: Vector, W: WallModel<V>>(
     );
     let viscosity = model.viscosity;
     let viscid = viscosity.active();
-    let discrete_shepard = W::RENORMALISE && wall_model.needs_discrete_shepard();
-    let sums = fluid_sums_dispatch(
-        model,
-        fluid,
-        neighbours,
-        kept,
-        i,
-        [
-            model.density_power != 0,
-            model.diffusion.scale != 0.0,
-            viscid,
-            discrete_shepard,
-        ],
-    );
     let FluidSums {
         grad_p,
         div_u,
         diffusion,
         viscous,
         shepard,
-    } = sums;
+    } = *sums;
     let view = ParticleView {
         index: i,
         x: x_i,
@@ -218,7 +247,7 @@ fn operators_with<V: Vector, W: WallModel<V>>(
 
 /// The fluid sums of one particle (before the wall model completes them).
 #[derive(Clone, Copy, Debug)]
-struct FluidSums<V> {
+pub struct FluidSums<V> {
     grad_p: V,
     div_u: f64,
     diffusion: f64,
@@ -226,116 +255,177 @@ struct FluidSums<V> {
     shepard: f64,
 }
 
-/// What the pair terms of particle `i` read: its own values and the neighbours' slices
-/// (all of one length, so one bounds check covers them).
-struct PairInputs<'a, V: Vector> {
-    model: &'a RateModel<V>,
+impl<V: Vector> FluidSums<V> {
+    /// Nothing summed yet.
+    pub const ZERO: Self = FluidSums {
+        grad_p: V::ZERO,
+        div_u: 0.0,
+        diffusion: 0.0,
+        viscous: V::ZERO,
+        shepard: 0.0,
+    };
+
+    /// Adds the terms of `c` that are on (the others stay zero).
+    #[inline(always)]
+    fn add<const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(&mut self, c: &Self) {
+        self.grad_p += c.grad_p;
+        self.div_u += c.div_u;
+        if DIFFUSE {
+            self.diffusion += c.diffusion;
+        }
+        if VISCID {
+            self.viscous += c.viscous;
+        }
+        if SHEPARD {
+            self.shepard += c.shepard;
+        }
+    }
+}
+
+/// What the pair terms read of one particle.
+#[derive(Clone, Copy)]
+struct Side<V> {
+    u: V,
+    rho: f64,
+    p: f64,
+    volume: f64,
+}
+
+/// The fluid values the pair terms read, as slices of one length (an index checked against
+/// one is in range for all).
+struct PairValues<'a, V> {
     velocity: &'a [V],
     density: &'a [f64],
     pressure: &'a [f64],
     volume: &'a [f64],
-    u_i: V,
-    rho_i: f64,
-    p_i: f64,
 }
 
-impl<V: Vector> PairInputs<'_, V> {
-    /// Adds the pair `(i, j)` with `r_ij`, `r = |r_ij|` and the kernel gradient factor `f` to
-    /// the sums of `i`: the only pair loop body of [`fluid_sums`], for searched and listed
-    /// neighbours alike (a function, not a closure with two call sites, so that it is always
-    /// inlined into both loops).
-    #[inline(always)]
-    fn add<const WEIGHTED: bool, const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
-        &self,
-        sums: &mut FluidSums<V>,
-        j: usize,
-        r_ij: V,
-        r: f64,
-        f: f64,
-    ) {
-        let (u_i, rho_i, p_i) = (self.u_i, self.rho_i, self.p_i);
-        let (velocity, density, pressure) = (self.velocity, self.density, self.pressure);
-        let grad_w = r_ij * f;
-        let volume_j = self.volume[j];
-        if WEIGHTED {
-            let ratio = rho_i / density[j];
-            sums.grad_p += pressure_gradient::pair_k(p_i, pressure[j], grad_w, volume_j, ratio);
-            sums.div_u += velocity_divergence::pair_k(u_i, velocity[j], grad_w, volume_j, ratio);
-        } else {
-            sums.grad_p += pressure_gradient::pair(p_i, pressure[j], grad_w, volume_j);
-            sums.div_u += velocity_divergence::pair(u_i, velocity[j], grad_w, volume_j);
-        }
-        if DIFFUSE {
-            sums.diffusion += self
-                .model
-                .diffusion
-                .pair(rho_i, density[j], r_ij, r, f, volume_j);
-        }
-        if VISCID {
-            let viscosity = self.model.viscosity;
-            sums.viscous += viscosity.pair(u_i, velocity[j], rho_i, density[j], f, volume_j);
-        }
-        if SHEPARD {
-            sums.shepard += self.model.kernel.value(r) * volume_j;
+impl<'a, V: Vector> PairValues<'a, V> {
+    fn of(fluid: &FluidState<'a, V>) -> Self {
+        let n = fluid.position.len();
+        PairValues {
+            velocity: &fluid.velocity[..n],
+            density: &fluid.density[..n],
+            pressure: &fluid.pressure[..n],
+            volume: &fluid.volume[..n],
         }
     }
 
-    /// Adds a run of neighbours `index[k]` with offsets `r_ij[k]`, `(|r_ij|, F) = r_f(k)`, to
-    /// the sums of `i`. The run is summed into a copy of the sums (held in registers, not in
-    /// memory) that replaces them at its end: the pair order and so the bits are those of one
-    /// running sum.
     #[inline(always)]
-    fn add_run<
-        const WEIGHTED: bool,
-        const DIFFUSE: bool,
-        const VISCID: bool,
-        const SHEPARD: bool,
-    >(
-        &self,
-        sums: &mut FluidSums<V>,
-        index: &[u32],
-        r_ij: &[V],
-        r_f: impl Fn(usize) -> (f64, f64),
-    ) {
-        let mut run = *sums;
-        for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
-            let (r, f) = r_f(k);
-            self.add::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut run, j as usize, r_ij, r, f);
+    fn side(&self, i: usize) -> Side<V> {
+        Side {
+            u: self.velocity[i],
+            rho: self.density[i],
+            p: self.pressure[i],
+            volume: self.volume[i],
         }
-        *sums = run;
     }
 }
 
-/// [`fluid_sums`] with its switches `[weighted, diffuse, viscid, shepard]` turned into
-/// constants, so that the pair loop of each combination carries no test of them.
+/// The shares of the pair `(i, j)` in the fluid sums of `i` and of `j`, `r_ij = x_j - x_i`,
+/// `r = |r_ij|` and `f` the kernel gradient factor: paper 1 eqs 10-11 or paper 3 eqs 37-38,
+/// the density diffusion, the viscous Laplacian of paper 3 eq 18 and the discrete Shepard
+/// sum. Each share has the bits that a sum over its own particle's neighbours adds, so a
+/// gather uses the first alone; the only pair loop body of the sweeps.
 #[inline(always)]
-fn fluid_sums_dispatch<V: Vector>(
+fn pair_shares<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
     model: &RateModel<V>,
-    fluid: &FluidState<V>,
-    neighbours: FluidNeighbours<'_, V>,
-    kept: &mut KeptBlock<V>,
-    i: usize,
-    switches: [bool; 4],
-) -> FluidSums<V> {
-    macro_rules! pick {
-        ($($w:literal $d:literal $v:literal $s:literal),*) => {
-            match switches {
-                $([$w, $d, $v, $s] => fluid_sums::<V, $w, $d, $v, $s>(model, fluid, neighbours, kept, i),)*
-            }
-        };
-    }
-    pick!(
-        false false false false, false false false true, false false true false,
-        false false true true, false true false false, false true false true,
-        false true true false, false true true true, true false false false,
-        true false false true, true false true false, true false true true,
-        true true false false, true true false true, true true true false, true true true true
-    )
+    a: &Side<V>,
+    b: &Side<V>,
+    r_ij: V,
+    r: f64,
+    f: f64,
+) -> [FluidSums<V>; 2] {
+    let grad_w = r_ij * f;
+    let volume = [a.volume, b.volume];
+    let (grad_p, div_u) = if WEIGHTED {
+        let ratio = [a.rho / b.rho, b.rho / a.rho];
+        (
+            pressure_gradient::pair_k_sides(a.p, b.p, grad_w, volume, ratio),
+            velocity_divergence::pair_k_sides(a.u, b.u, grad_w, volume, ratio),
+        )
+    } else {
+        (
+            pressure_gradient::pair_sides(a.p, b.p, grad_w, volume),
+            velocity_divergence::pair_sides(a.u, b.u, grad_w, volume),
+        )
+    };
+    let diffusion = if DIFFUSE {
+        model.diffusion.pair_sides(a.rho, b.rho, r_ij, r, f, volume)
+    } else {
+        (0.0, 0.0)
+    };
+    let viscous = if VISCID {
+        model
+            .viscosity
+            .pair_sides(a.u, b.u, [a.rho, b.rho], f, volume)
+    } else {
+        (V::ZERO, V::ZERO)
+    };
+    let shepard = if SHEPARD {
+        let w = model.kernel.value(r);
+        (w * b.volume, w * a.volume)
+    } else {
+        (0.0, 0.0)
+    };
+    [
+        FluidSums {
+            grad_p: grad_p.0,
+            div_u: div_u.0,
+            diffusion: diffusion.0,
+            viscous: viscous.0,
+            shepard: shepard.0,
+        },
+        FluidSums {
+            grad_p: grad_p.1,
+            div_u: div_u.1,
+            diffusion: diffusion.1,
+            viscous: viscous.1,
+            shepard: shepard.1,
+        },
+    ]
 }
 
-/// The fluid-neighbour sums of particle `i` (paper 1 eqs 10-11 or paper 3 eqs 37-38, the
-/// density diffusion, the viscous Laplacian of paper 3 eq 18 and the discrete Shepard sum),
-/// in the grid's storage order of the neighbours, searched or listed ([`FluidNeighbours`]).
+/// Adds a run of neighbours `index[k]` of `i` (values `a`) with offsets `r_ij[k]`, `(|r_ij|,
+/// F) = r_f(k)`, to the sums of `i`. The run is summed into a copy of the sums (held in
+/// registers, not in memory) that replaces them at its end: the pair order and so the bits
+/// are those of one running sum.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn gather_run<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
+    model: &RateModel<V>,
+    values: &PairValues<'_, V>,
+    a: &Side<V>,
+    sums: &mut FluidSums<V>,
+    index: &[u32],
+    r_ij: &[V],
+    r_f: impl Fn(usize) -> (f64, f64),
+) {
+    let mut run = *sums;
+    for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
+        let (r, f) = r_f(k);
+        let b = values.side(j as usize);
+        let [share, _] =
+            pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, a, &b, r_ij, r, f);
+        run.add::<DIFFUSE, VISCID, SHEPARD>(&share);
+    }
+    *sums = run;
+}
+
+/// The fluid-neighbour sums of particle `i` ([`pair_shares`]), in the grid's storage order
+/// of the neighbours, searched or listed ([`Gather`]).
 #[inline(never)]
 fn fluid_sums<
     V: Vector,
@@ -346,76 +436,119 @@ fn fluid_sums<
 >(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    neighbours: FluidNeighbours<'_, V>,
+    neighbours: Gather<'_, V>,
     kept: &mut KeptBlock<V>,
     i: usize,
 ) -> FluidSums<V> {
     let kernel = &model.kernel;
-    let n = fluid.position.len();
-    // Slices of one length: a neighbour index checked against the positions is in range
-    // for all of them.
-    let (position, velocity, density) = (
-        &fluid.position[..n],
-        &fluid.velocity[..n],
-        &fluid.density[..n],
-    );
-    let (pressure, volume) = (&fluid.pressure[..n], &fluid.volume[..n]);
-    let (x_i, u_i, rho_i, p_i) = (position[i], velocity[i], density[i], pressure[i]);
-    let mut sums = FluidSums {
-        grad_p: V::ZERO,
-        div_u: 0.0,
-        diffusion: 0.0,
-        viscous: V::ZERO,
-        shepard: 0.0,
-    };
-    let pair = PairInputs {
-        model,
-        velocity,
-        density,
-        pressure,
-        volume,
-        u_i,
-        rho_i,
-        p_i,
-    };
-    // The two searched arms are written out: one closure shared by reference is not inlined
-    // into the searches (callgrind, 20k dam break: +8% instructions).
+    let values = PairValues::of(fluid);
+    let position = &fluid.position[..values.velocity.len()];
+    let a = values.side(i);
+    let mut sums = FluidSums::ZERO;
     match neighbours {
-        FluidNeighbours::Grid(grid) => {
-            grid.for_each_neighbour_run(x_i, position, kernel.support, kept, |index, r_ij, r2| {
-                pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
-                    let r = r2[k].sqrt();
-                    (r, kernel.gradient_factor_within(r))
-                })
-            })
-        }
-        FluidNeighbours::Candidates(list) => list.for_each_neighbour_run(
-            i,
-            x_i,
+        Gather::Grid(grid) => grid.for_each_neighbour_run(
+            position[i],
             position,
             kernel.support,
             kept,
             |index, r_ij, r2| {
-                pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
-                    let r = r2[k].sqrt();
-                    (r, kernel.gradient_factor_within(r))
-                })
+                gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    model,
+                    &values,
+                    &a,
+                    &mut sums,
+                    index,
+                    r_ij,
+                    |k| {
+                        let r = r2[k].sqrt();
+                        (r, kernel.gradient_factor_within(r))
+                    },
+                )
+            },
+        ),
+        Gather::Candidates(list) => list.for_each_neighbour_run(
+            i,
+            position[i],
+            position,
+            kernel.support,
+            kept,
+            |index, r_ij, r2| {
+                gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    model,
+                    &values,
+                    &a,
+                    &mut sums,
+                    index,
+                    r_ij,
+                    |k| {
+                        let r = r2[k].sqrt();
+                        (r, kernel.gradient_factor_within(r))
+                    },
+                )
             },
         ),
         // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
-        FluidNeighbours::List(list) => {
+        Gather::List(list) => {
             let (index, r_ij, factor) = list.neighbours(i);
-            pair.add_run::<WEIGHTED, DIFFUSE, VISCID, SHEPARD>(&mut sums, index, r_ij, |k| {
-                (r_ij[k].length(), factor[k])
-            })
+            gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                model,
+                &values,
+                &a,
+                &mut sums,
+                index,
+                r_ij,
+                |k| (r_ij[k].length(), factor[k]),
+            )
         }
     }
     sums
 }
 
+/// The fluid sums of every listed particle into `sums`, each pair of `pairs` evaluated once
+/// and its shares ([`pair_shares`]) added to both particles.
+#[inline(never)]
+fn scattered_sums<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
+    model: &RateModel<V>,
+    fluid: &FluidState<V>,
+    pairs: &PairBlocks<V>,
+    sums: &mut [FluidSums<V>],
+) {
+    let kernel = &model.kernel;
+    let values = PairValues::of(fluid);
+    sums.par_iter_mut()
+        .with_min_len(4096)
+        .for_each(|s| *s = FluidSums::ZERO);
+    pairs.sweep(
+        fluid.position,
+        kernel.support,
+        sums,
+        |i, run, index, r_ij, r2| {
+            let a = values.side(i);
+            let mut own = *run.first();
+            for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
+                let r = r2[k].sqrt();
+                let f = kernel.gradient_factor_within(r);
+                let b = values.side(j as usize);
+                let [to_i, to_j] =
+                    pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, &a, &b, r_ij, r, f);
+                own.add::<DIFFUSE, VISCID, SHEPARD>(&to_i);
+                run.partner(k).add::<DIFFUSE, VISCID, SHEPARD>(&to_j);
+            }
+            *run.first() = own;
+        },
+    );
+}
+
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
 /// into `acceleration` and `density_rate`, in parallel; `dissipation` receives each
-/// particle's [`DissipationRates`] (zero for a term that is off).
+/// particle's [`DissipationRates`] (zero for a term that is off). `pair_sums` holds the fluid
+/// sums of a sweep over [`FluidNeighbours::Pairs`].
 #[allow(clippy::too_many_arguments)]
 pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -427,7 +560,14 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     acceleration: &mut [V],
     density_rate: &mut [f64],
     dissipation: &mut [DissipationRates],
+    pair_sums: &mut Vec<FluidSums<V>>,
 ) {
+    let switches = sum_switches(model, wall_model);
+    if let FluidNeighbours::Pairs(pairs) = neighbours {
+        pair_sums.resize(fluid.position.len(), FluidSums::ZERO);
+        with_switches!(switches, scattered_sums(model, fluid, pairs, pair_sums));
+    }
+    let pair_sums = &pair_sums[..];
     let body = model.gravity + model.body_force;
     acceleration
         .par_iter_mut()
@@ -435,8 +575,14 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         .enumerate()
         .with_min_len(256)
         .for_each_init(KeptBlock::new, |kept, (i, (a, (drho, dissipation)))| {
+            let sums = match neighbours {
+                FluidNeighbours::Pairs(_) => pair_sums[i],
+                FluidNeighbours::Gather(gather) => {
+                    with_switches!(switches, fluid_sums(model, fluid, gather, kept, i))
+                }
+            };
             let walls = (wall_model, elements, wall_grid);
-            let op = operators_with(model, walls, fluid, neighbours, kept, i);
+            let op = operators_with(model, walls, fluid, &sums, i);
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;
             *a = (op.pressure_gradient + op.wall_pressure_gradient) * (-1.0 / rho) + viscous + body;

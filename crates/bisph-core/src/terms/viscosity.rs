@@ -55,7 +55,27 @@ impl Viscosity {
         gradient_factor: f64,
         volume_j: f64,
     ) -> V {
-        (u_i - u_j) * (self.nu * (rho_i + rho_j) / rho_i * gradient_factor * volume_j)
+        self.pair_sides(u_i, u_j, [rho_i, rho_j], gradient_factor, [0.0, volume_j])
+            .0
+    }
+
+    /// One pair's contributions to both particles, `(to i, to j)`, with `rho = [rho_i,
+    /// rho_j]` and `volume = [V_i, V_j]` (each the bits its own particle's sum would add).
+    #[inline(always)]
+    pub fn pair_sides<V: Vector>(
+        &self,
+        u_i: V,
+        u_j: V,
+        rho: [f64; 2],
+        gradient_factor: f64,
+        volume: [f64; 2],
+    ) -> (V, V) {
+        let du = u_i - u_j;
+        let mu = self.nu * (rho[0] + rho[1]);
+        (
+            du * (mu / rho[0] * gradient_factor * volume[1]),
+            -(du * (mu / rho[1] * gradient_factor * volume[0])),
+        )
     }
 
     /// One wall element's contribution to `du_i/dt` (eqs 18-20, laminar wall shear):

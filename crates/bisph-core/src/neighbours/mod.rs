@@ -21,7 +21,10 @@
 //! terms never see a raw position difference across the period. Stored points must lie in
 //! the primary period (see [`Periodicity::wrap`]); periods must hold at least three cells.
 
+mod pair_blocks;
+
 use crate::dim::Vector;
+pub use pair_blocks::{PairBlocks, RunValues};
 use rayon::prelude::*;
 
 /// Periodic axes of a domain: along axis `k` with `length[k] > 0` the point `r` and
@@ -338,6 +341,37 @@ impl<V: Vector> CellGrid<V> {
             self.cell_start[first + x0] as usize,
             self.cell_start[first + x1 + 1] as usize,
         )
+    }
+
+    /// Slots `(start, end)` of the cells of the block anchored at cell `a` (grid coordinates):
+    /// the cell at offset `d` from it (bit `k` of `d` one step along axis `k`) at index `d`,
+    /// wrapped around periodic axes; empty past the grid along open axes and for `d >= 2^dim`.
+    #[inline]
+    pub(crate) fn block_cells(&self, a: [u32; 3]) -> [(usize, usize); 8] {
+        let mut cells = [(0, 0); 8];
+        for (d, cell) in cells.iter_mut().enumerate().take(1 << V::DIM) {
+            let mut c = [0usize; 3];
+            let mut inside = true;
+            for k in 0..V::DIM {
+                let m = a[k] as usize + (d >> k & 1);
+                c[k] = if m < self.dims[k] {
+                    m
+                } else if self.period.is_periodic(k) {
+                    m - self.dims[k]
+                } else {
+                    inside = false;
+                    break;
+                };
+            }
+            if inside {
+                let rank = self.row_rank[c[1] + self.dims[1] * c[2]] as usize + c[0];
+                *cell = (
+                    self.cell_start[rank] as usize,
+                    self.cell_start[rank + 1] as usize,
+                );
+            }
+        }
+        cells
     }
 
     /// Calls `visit(j)` for every point `j` in the cells around `x` (a superset of the points
@@ -890,23 +924,7 @@ impl<V: Vector> CandidateList<V> {
     /// `true` when the list was built for as many points as `points` holds and none of them
     /// has moved more than `drift` (minimum image across periodic axes) since.
     pub fn holds(&self, points: &[V], drift: f64) -> bool {
-        if points.len() != self.origin.len() {
-            return false;
-        }
-        let period = self.period;
-        let periodic = period.any();
-        // The largest squared displacement: a maximum, the same for any split into threads.
-        let largest = points
-            .par_iter()
-            .zip(self.origin.par_iter())
-            .with_min_len(4096)
-            .map(|(&p, &o)| {
-                let d = p - o;
-                let d = if periodic { period.minimum_image(d) } else { d };
-                d.length_squared()
-            })
-            .reduce(|| 0.0, f64::max);
-        largest <= drift * drift
+        largest_drift(&self.origin, points, &self.period).is_some_and(|d2| d2 <= drift * drift)
     }
 
     /// The points as they were at the build.
@@ -1003,6 +1021,26 @@ impl<V: Vector> CandidateList<V> {
             visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
         }
     }
+}
+
+/// The largest squared displacement from `origin` to `points` (minimum image across periodic
+/// axes), `None` when their lengths differ: a maximum, the same for any split into threads.
+fn largest_drift<V: Vector>(origin: &[V], points: &[V], period: &Periodicity<V>) -> Option<f64> {
+    if points.len() != origin.len() {
+        return None;
+    }
+    let periodic = period.any();
+    let largest = points
+        .par_iter()
+        .zip(origin.par_iter())
+        .with_min_len(4096)
+        .map(|(&p, &o)| {
+            let d = p - o;
+            let d = if periodic { period.minimum_image(d) } else { d };
+            d.length_squared()
+        })
+        .reduce(|| 0.0, f64::max);
+    Some(largest)
 }
 
 /// Morton key of cell coordinates: their bits interleaved (`dim` = 2 or 3 axes, at most
@@ -1286,7 +1324,7 @@ mod tests {
 
     /// Pseudo-random 2-D and 3-D point clouds from `seed`, each with a period along x (and z
     /// in 3-D) that the points fill.
-    fn point_clouds(
+    pub(super) fn point_clouds(
         seed: u64,
     ) -> (
         Vec<DVec2>,

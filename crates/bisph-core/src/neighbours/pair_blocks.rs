@@ -1,0 +1,439 @@
+//! A Verlet list that holds each pair once, for sweeps that evaluate a pair for both of its
+//! particles, in an order that depends neither on the number of threads nor on how a run is
+//! split into parts.
+//!
+//! **Blocks.** The cells of the grid are at least the listing radius wide, so a pair's two
+//! cells are the same or adjacent. A pair belongs to the block of `2^d` cells anchored at its
+//! cells' lowest corner (along an axis: the lower cell, or the cell itself when both share
+//! it; across the end of a periodic axis, the last cell). Each cell lies in `2^d` blocks.
+//!
+//! **Classes.** Anchors are classed by the parity of their lattice coordinates, so blocks of
+//! one class share no cell. Along a periodic axis with an odd number of cells the last
+//! anchor, whose block wraps to the first cell, is a class of its own. A sweep takes the
+//! classes in turn and the blocks of a class in parallel: no particle is written by two
+//! tasks at once, and each particle receives its pairs class by class, within a block in
+//! the block's fixed order.
+//!
+//! **Order within a block.** Its cells in the order of their offsets from the anchor (`x`
+//! first), the particles of a cell in the grid's order (increasing key for a keyed grid).
+//! A pair is listed with its first particle: the one in the cell of lower offset, or the
+//! earlier one of a shared cell. A part of a split run holds the same particles near its own
+//! with the same keys in the same lattice cells, so every own particle meets its pairs in
+//! the order of the whole run.
+
+use super::{CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use crate::dim::Vector;
+use rayon::prelude::*;
+
+/// A pair list over the blocks of a [`CellGrid`] (see the module documentation): the pairs
+/// within a listing radius when built, each once, kept while no particle has moved more than
+/// half the skin.
+#[derive(Clone, Debug, Default)]
+pub struct PairBlocks<V> {
+    /// The chunks of blocks of each class, classes in sweep order.
+    classes: Vec<Vec<BlockChunk>>,
+    /// The points at the build.
+    origin: Vec<V>,
+    /// Points whose pairs are listed: the pairs with at least one of the first `owned`.
+    owned: usize,
+    period: Periodicity<V>,
+}
+
+/// Consecutive blocks of one class, swept by one task: rows of a first particle and its
+/// listed partners.
+#[derive(Clone, Debug, Default)]
+struct BlockChunk {
+    /// Anchors of the chunk's blocks (grid cell coordinates).
+    anchors: Vec<[u32; 3]>,
+    /// The first particle of each row.
+    first: Vec<u32>,
+    /// Row `r`'s partners are `second[start[r]..start[r + 1]]`.
+    start: Vec<u32>,
+    second: Vec<u32>,
+}
+
+/// About this many particles per chunk (a chunk is a task of the sweep).
+const CHUNK_PARTICLES: usize = 2048;
+
+impl<V: Vector> PairBlocks<V> {
+    /// Lists the pairs within `radius` (at most one cell of `grid`, which must index `points`)
+    /// with at least one of the first `owned` points, each once, in parallel over chunks of
+    /// blocks (the content does not depend on the number of threads).
+    ///
+    /// # Panics
+    /// When `owned` exceeds the number of points.
+    pub fn rebuild(&mut self, grid: &CellGrid<V>, points: &[V], owned: usize, radius: f64) {
+        assert!(owned <= points.len(), "more owned points than points");
+        self.period = *grid.periodicity();
+        self.origin.clear();
+        self.origin.extend_from_slice(points);
+        self.owned = owned;
+        self.partition(grid);
+        let period = self.period;
+        let r2max = radius * radius;
+        self.classes
+            .par_iter_mut()
+            .flatten()
+            .for_each(|chunk| chunk.fill(grid, points, owned, r2max, &period));
+    }
+
+    /// Groups the anchors of every class into chunks of about [`CHUNK_PARTICLES`] particles.
+    fn partition(&mut self, grid: &CellGrid<V>) {
+        let dims = grid.dims;
+        let mut classes_per_axis = [1usize; 3];
+        for (k, c) in classes_per_axis.iter_mut().enumerate().take(V::DIM) {
+            *c = if self.period.is_periodic(k) && dims[k] % 2 == 1 {
+                3
+            } else {
+                2
+            };
+        }
+        let class_of = |a: [usize; 3]| {
+            let mut class = 0;
+            for k in (0..V::DIM).rev() {
+                let c = if self.period.is_periodic(k) {
+                    if dims[k] % 2 == 1 && a[k] == dims[k] - 1 {
+                        2
+                    } else {
+                        a[k] % 2
+                    }
+                } else {
+                    (a[k] as i64 + grid.base[k]).rem_euclid(2) as usize
+                };
+                class = class * classes_per_axis[k] + c;
+            }
+            class
+        };
+        let count = classes_per_axis.iter().product::<usize>();
+        let mut anchors: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                for x in 0..dims[0] {
+                    let a = [x, y, z];
+                    anchors[class_of(a)].push(a.map(|c| c as u32));
+                }
+            }
+        }
+        self.classes.resize_with(count, Vec::new);
+        for (chunks, anchors) in self.classes.iter_mut().zip(anchors) {
+            let mut used = 0;
+            let mut particles = CHUNK_PARTICLES;
+            for a in anchors {
+                let in_block: usize = grid.block_cells(a).iter().map(|&(s, e)| e - s).sum();
+                if in_block == 0 {
+                    continue;
+                }
+                if particles >= CHUNK_PARTICLES {
+                    if used == chunks.len() {
+                        chunks.push(BlockChunk::default());
+                    }
+                    chunks[used].anchors.clear();
+                    used += 1;
+                    particles = 0;
+                }
+                chunks[used - 1].anchors.push(a);
+                particles += in_block;
+            }
+            chunks.truncate(used);
+        }
+    }
+
+    /// `true` when the list was built for as many points as `points` holds and none of them
+    /// has moved more than `drift` (minimum image across periodic axes) since.
+    pub fn holds(&self, points: &[V], drift: f64) -> bool {
+        super::largest_drift(&self.origin, points, &self.period)
+            .is_some_and(|d2| d2 <= drift * drift)
+    }
+
+    /// The points as they were at the build.
+    pub fn origin(&self) -> &[V] {
+        &self.origin
+    }
+
+    /// Number of points listed.
+    pub fn len(&self) -> usize {
+        self.origin.len()
+    }
+
+    /// `true` when no point is listed.
+    pub fn is_empty(&self) -> bool {
+        self.origin.is_empty()
+    }
+
+    /// Number of pairs listed.
+    pub fn pairs(&self) -> usize {
+        self.classes.iter().flatten().map(|c| c.second.len()).sum()
+    }
+
+    /// Number of pairs listed of each point (as first or second particle).
+    pub fn pair_counts(&self) -> Vec<u32> {
+        let mut counts = vec![0u32; self.origin.len()];
+        for chunk in self.classes.iter().flatten() {
+            for (r, &i) in chunk.first.iter().enumerate() {
+                let partners = &chunk.second[chunk.start[r] as usize..chunk.start[r + 1] as usize];
+                counts[i as usize] += partners.len() as u32;
+                for &j in partners {
+                    counts[j as usize] += 1;
+                }
+            }
+        }
+        counts
+    }
+
+    /// Bytes held by the buffers (their capacities).
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<V>() * self.origin.capacity()
+            + self
+                .classes
+                .iter()
+                .flatten()
+                .map(|c| {
+                    12 * c.anchors.capacity()
+                        + 4 * (c.first.capacity() + c.start.capacity() + c.second.capacity())
+                })
+                .sum::<usize>()
+    }
+
+    /// Sweeps the listed pairs within `radius` at the positions `points`: for each first
+    /// particle `i`, calls `visit(i, values, index, r_ij, r2)` with runs of its partners
+    /// within `radius` (`index[k]` a point `j`, `r_ij[k] = points[j] - points[i]`, the
+    /// minimum image across periodic axes, `r2[k] = |r_ij[k]|^2`), where `values` gives
+    /// `values[i]` and `values[j]` of the run's partners. Classes in turn, the chunks of a
+    /// class in parallel; each point's values are visited in an order that depends only on
+    /// the list (see the module documentation).
+    ///
+    /// # Panics
+    /// When `points` or `values` hold fewer entries than the list.
+    pub fn sweep<T: Send>(
+        &self,
+        points: &[V],
+        radius: f64,
+        values: &mut [T],
+        visit: impl Fn(usize, &mut RunValues<'_, T>, &[u32], &[V], &[f64]) + Sync,
+    ) {
+        let n = self.origin.len();
+        assert!(
+            points.len() >= n && values.len() >= n,
+            "fewer points than listed"
+        );
+        let shared = SharedValues {
+            data: values.as_mut_ptr(),
+        };
+        let r2max = radius * radius;
+        let period = self.period;
+        for class in &self.classes {
+            class
+                .par_iter()
+                .for_each_init(KeptBlock::new, |kept, chunk| {
+                    let shared = &shared;
+                    chunk.sweep(points, r2max, &period, kept, |i, index, r_ij, r2| {
+                        let mut run = RunValues { shared, i, index };
+                        visit(i, &mut run, index, r_ij, r2);
+                    });
+                });
+        }
+    }
+}
+
+/// The values of one point and its partners in a run of [`PairBlocks::sweep`].
+pub struct RunValues<'a, T> {
+    shared: &'a SharedValues<T>,
+    i: usize,
+    index: &'a [u32],
+}
+
+impl<T> RunValues<'_, T> {
+    /// The first particle's value.
+    #[inline(always)]
+    pub fn first(&mut self) -> &mut T {
+        // SAFETY: `i` indexes the values (checked against the list in `sweep`), and no other
+        // task of this class reaches it (blocks of a class share no particle); the borrow of
+        // `self` keeps it the only reference made here.
+        unsafe { &mut *self.shared.data.add(self.i) }
+    }
+
+    /// The value of the run's partner `k`.
+    #[inline(always)]
+    pub fn partner(&mut self, k: usize) -> &mut T {
+        let j = self.index[k] as usize;
+        // SAFETY: as for `first`: `j` is a listed point of this chunk's blocks, and not `i`.
+        unsafe { &mut *self.shared.data.add(j) }
+    }
+}
+
+/// The values of a sweep, shared by its tasks, which write disjoint points.
+struct SharedValues<T> {
+    data: *mut T,
+}
+
+// SAFETY: the tasks of a class write the values of disjoint sets of points (module
+// documentation), and classes are swept one after the other.
+unsafe impl<T: Send> Sync for SharedValues<T> {}
+
+impl BlockChunk {
+    /// Lists the rows of the chunk's blocks: for each particle of a block, its partners within
+    /// `sqrt(r2max)` of the block, in the block's order, the pairs of two points at or past
+    /// `owned` left out.
+    fn fill<V: Vector>(
+        &mut self,
+        grid: &CellGrid<V>,
+        points: &[V],
+        owned: usize,
+        r2max: f64,
+        period: &Periodicity<V>,
+    ) {
+        self.first.clear();
+        self.start.clear();
+        self.second.clear();
+        self.start.push(0);
+        let corners = 1usize << V::DIM;
+        for a in &self.anchors {
+            let cells = grid.block_cells(*a);
+            for d in 0..corners {
+                let (s0, s1) = cells[d];
+                for s in s0..s1 {
+                    let p = grid.items[s] as usize;
+                    let x = points[p];
+                    let halo = p >= owned;
+                    for (d2, &(t0, t1)) in cells.iter().enumerate().take(corners).skip(d) {
+                        if d2 & d != 0 {
+                            continue;
+                        }
+                        let from = if d2 == d { s + 1 } else { t0 };
+                        for &q in &grid.items[from..t1] {
+                            if halo && q as usize >= owned {
+                                continue;
+                            }
+                            let r = period.minimum_image(points[q as usize] - x);
+                            if r.length_squared() < r2max {
+                                self.second.push(q);
+                            }
+                        }
+                    }
+                    if self.second.len() > *self.start.last().unwrap() as usize {
+                        self.first.push(p as u32);
+                        self.start.push(self.second.len() as u32);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Calls `visit(i, index, r_ij, r2)` with the runs of partners within `sqrt(r2max)` of
+    /// each row's first particle `i` at `points`.
+    #[inline(always)]
+    fn sweep<V: Vector>(
+        &self,
+        points: &[V],
+        r2max: f64,
+        period: &Periodicity<V>,
+        kept: &mut KeptBlock<V>,
+        mut visit: impl FnMut(usize, &[u32], &[V], &[f64]),
+    ) {
+        let periodic = period.any();
+        for (r, &i) in self.first.iter().enumerate() {
+            let i = i as usize;
+            let x = points[i];
+            let partners = &self.second[self.start[r] as usize..self.start[r + 1] as usize];
+            for chunk in partners.chunks(KEPT_BLOCK) {
+                let n = if periodic {
+                    kept.filter(
+                        chunk
+                            .iter()
+                            .map(|&j| (j, period.minimum_image(points[j as usize] - x))),
+                        r2max,
+                    )
+                } else {
+                    kept.filter(chunk.iter().map(|&j| (j, points[j as usize] - x)), r2max)
+                };
+                if n > 0 {
+                    visit(i, &kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neighbours::tests::point_clouds;
+    use std::collections::BTreeSet;
+
+    /// The keys of each point's partners in the order a sweep meets them, for the points
+    /// `points` with global `keys`, of which the first `owned` are listed.
+    fn partner_order<V: Vector>(
+        points: &[V],
+        keys: &[u32],
+        owned: usize,
+        radius: f64,
+        period: Periodicity<V>,
+    ) -> Vec<Vec<u32>> {
+        let mut grid = CellGrid::with_period(radius * 1.1, period).unwrap();
+        grid.rebuild_keyed(points, keys);
+        let mut list = PairBlocks::default();
+        list.rebuild(&grid, points, owned, radius * 1.1);
+        let mut order = vec![Vec::new(); points.len()];
+        list.sweep(points, radius, &mut order, |i, run, index, r_ij, r2| {
+            for (k, &j) in index.iter().enumerate() {
+                let expected = period.minimum_image(points[j as usize] - points[i]);
+                assert_eq!((r_ij[k], r2[k]), (expected, expected.length_squared()));
+                run.first().push(keys[j as usize]);
+                run.partner(k).push(keys[i]);
+            }
+        });
+        order
+    }
+
+    /// Every pair within the radius is met once from each side; a part (its own points and
+    /// those within the listing radius of them) meets its own points' pairs in the order of
+    /// the whole set.
+    fn check<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let n = points.len();
+        let keys: Vec<u32> = (0..n as u32)
+            .map(|k| k.wrapping_mul(2654435761) >> 4)
+            .collect();
+        let whole = partner_order(&points, &keys, n, radius, period);
+        for i in 0..n {
+            let brute: BTreeSet<u32> = (0..n)
+                .filter(|&j| {
+                    j != i
+                        && period.minimum_image(points[j] - points[i]).length_squared()
+                            < radius * radius
+                })
+                .map(|j| keys[j])
+                .collect();
+            let met: BTreeSet<u32> = whole[i].iter().copied().collect();
+            assert_eq!(met.len(), whole[i].len(), "a pair of point {i} met twice");
+            assert_eq!(met, brute, "partners of point {i}");
+        }
+        let own: Vec<usize> = (0..n).filter(|&i| points[i].get(1) < 0.25).collect();
+        let reach = 1.1 * radius;
+        let halo: Vec<usize> = (0..n)
+            .filter(|&j| points[j].get(1) >= 0.25)
+            .filter(|&j| {
+                own.iter().any(|&i| {
+                    period.minimum_image(points[j] - points[i]).length_squared() < reach * reach
+                })
+            })
+            .collect();
+        let members: Vec<usize> = own.iter().rev().chain(halo.iter().rev()).copied().collect();
+        let (part_points, part_keys): (Vec<V>, Vec<u32>) =
+            members.iter().map(|&i| (points[i], keys[i])).unzip();
+        let part = partner_order(&part_points, &part_keys, own.len(), radius, period);
+        for (k, &i) in members.iter().enumerate() {
+            if own.contains(&i) {
+                assert_eq!(part[k], whole[i], "order of point {i} in the part");
+            }
+        }
+    }
+
+    #[test]
+    fn every_pair_once_in_the_order_of_the_whole_set() {
+        let (p2, period2, p3, period3) = point_clouds(7);
+        check(p2.clone(), 0.07, Periodicity::none());
+        check(p2, 0.07, period2);
+        check(p3.clone(), 0.07, Periodicity::none());
+        check(p3, 0.07, period3);
+    }
+}
