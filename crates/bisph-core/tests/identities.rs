@@ -5,9 +5,9 @@
 use bisph_core::eos::Eos;
 use bisph_core::geometry::{box_elements_2d, box_elements_3d, polyline_elements, ElementShape};
 use bisph_core::kernel::Wendland;
-use bisph_core::neighbours::{CellGrid, PairList};
+use bisph_core::neighbours::CellGrid;
 use bisph_core::particles::FluidState;
-use bisph_core::terms::{particle_operators, DensityDiffusion, DiffusionForm, Gather, RateModel};
+use bisph_core::terms::{particle_operators, DensityDiffusion, DiffusionForm, RateModel};
 use bisph_core::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
 use bisph_core::walls::BoundaryElements;
 use bisph_core::Vector;
@@ -124,33 +124,17 @@ fn powers<V: Vector>(
     grid.rebuild(&state.position);
     let mut wall_grid = CellGrid::new(kernel.support);
     wall_grid.rebuild(&elements.centre);
-    // The listed pairs (midpoint iterations) give the searched operators to the bit.
-    let mut pairs = PairList::default();
-    let position = &state.position;
-    pairs.rebuild(&grid, position, position, kernel.support, |r| {
-        kernel.gradient_factor(r)
-    });
     let (mut fluid_power, mut wall_power, mut scale) = (0.0, 0.0, 0.0);
     for i in 0..state.position.len() {
         let op = particle_operators(
             &model,
             &EnergyConservingWalls,
             &view,
-            Gather::Grid(&grid),
+            &grid,
             elements,
             &wall_grid,
             i,
         );
-        let listed = particle_operators(
-            &model,
-            &EnergyConservingWalls,
-            &view,
-            Gather::List(&pairs),
-            elements,
-            &wall_grid,
-            i,
-        );
-        assert_eq!(listed, op, "particle {i}");
         let volume = state.mass[i] / state.density[i];
         let (u, p) = (state.velocity[i], state.pressure[i]);
         // P_k = -sum V u . grad p,  P_c = -sum V p div u  (paper 1 eqs 27-28)

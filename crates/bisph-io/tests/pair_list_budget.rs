@@ -1,6 +1,6 @@
 //! The midpoint scheme's pair lists only save time: a run that may not list its pairs (a
-//! zero budget, as a large run on a small machine) searches them at every iteration and
-//! gives the same bits.
+//! zero budget, as a large run on a small machine) filters the Verlet list's pairs at every
+//! iteration and gives the same bits.
 
 use bisph_core::Simulation;
 use bisph_io::case::{build_simulation, load_case};

@@ -24,7 +24,7 @@
 mod pair_blocks;
 
 use crate::dim::Vector;
-pub use pair_blocks::{PairBlocks, RunValues};
+pub use pair_blocks::{ListedPairs, PairBlocks, RunValues};
 use rayon::prelude::*;
 
 /// Periodic axes of a domain: along axis `k` with `length[k] > 0` the point `r` and
@@ -759,22 +759,6 @@ impl<V: Vector> PairList<V> {
         });
     }
 
-    /// Lists the neighbours within `radius` of every point whose candidates `candidates`
-    /// lists (built over the same points, none of which has moved more than half its skin
-    /// since) among `points`, with `factor(|r_ij|)` per pair, in the candidates' order; in
-    /// parallel over blocks (the content does not depend on the number of threads).
-    pub fn rebuild_from_candidates(
-        &mut self,
-        candidates: &CandidateList<V>,
-        points: &[V],
-        radius: f64,
-        factor: impl Fn(f64) -> f64 + Sync,
-    ) {
-        self.fill(candidates.queries(), factor, |i, visit| {
-            candidates.for_each_neighbour(i, points[i], points, radius, visit)
-        });
-    }
-
     /// Fills the rows of `queries` queries, block by block in parallel: `neighbours(i, visit)`
     /// calls `visit(j, r_ij, |r_ij|)` for each neighbour of query `i`, in the row's order.
     fn fill(
@@ -854,175 +838,6 @@ impl<V: Vector> PairList<V> {
     }
 }
 
-/// Candidate neighbours kept across explicit steps (a Verlet list with a skin): for point `i`,
-/// the points within `radius = support + skin` of it when the list was built, in the storage
-/// order of [`CellGrid::for_each_neighbour`] at that time. While no point has moved more than
-/// `skin / 2` from where it was at the build ([`CandidateList::holds`]), every pair within
-/// the support is among the candidates, so [`CandidateList::for_each_neighbour`] filters these
-/// (about `(1 + skin / support)^d` per neighbour) instead of the cells around the point
-/// (about 2.9 per neighbour in 2-D). The points must not be reordered while the list is used.
-///
-/// Compressed rows in blocks of [`CandidateList::BLOCK`] points (4 bytes per candidate),
-/// filled in parallel; the buffers are kept between rebuilds.
-#[derive(Clone, Debug, Default)]
-pub struct CandidateList<V> {
-    blocks: Vec<CandidateBlock>,
-    /// The points at the build.
-    origin: Vec<V>,
-    /// Points whose candidates are listed: the first this many.
-    queries: usize,
-    period: Periodicity<V>,
-}
-
-/// One block of points of a [`CandidateList`].
-#[derive(Clone, Debug, Default)]
-struct CandidateBlock {
-    start: Vec<u32>,
-    index: Vec<u32>,
-}
-
-impl<V: Vector> CandidateList<V> {
-    /// Points per block.
-    pub const BLOCK: usize = 256;
-
-    /// Lists, for every point, the points within `radius` (at most one cell of `grid`, which
-    /// must index `points`), in parallel over blocks (the content does not depend on the
-    /// number of threads).
-    pub fn rebuild(&mut self, grid: &CellGrid<V>, points: &[V], radius: f64) {
-        self.rebuild_for(grid, points, points.len(), radius);
-    }
-
-    /// [`CandidateList::rebuild`] listing the candidates of the first `queries` points only
-    /// (a part of a split run lists its own particles'); [`CandidateList::holds`] still
-    /// watches every point.
-    ///
-    /// # Panics
-    /// When `queries` exceeds the number of points.
-    pub fn rebuild_for(&mut self, grid: &CellGrid<V>, points: &[V], queries: usize, radius: f64) {
-        self.period = *grid.periodicity();
-        self.origin.clear();
-        self.origin.extend_from_slice(points);
-        self.queries = queries;
-        self.blocks
-            .resize_with(queries.div_ceil(Self::BLOCK), Default::default);
-        self.blocks
-            .par_iter_mut()
-            .zip(points[..queries].par_chunks(Self::BLOCK))
-            .for_each(|(block, chunk)| {
-                block.start.clear();
-                block.index.clear();
-                block.start.push(0);
-                for &x in chunk {
-                    grid.for_each_neighbour(x, points, radius, |j, _, _| {
-                        block.index.push(j as u32);
-                    });
-                    block.start.push(block.index.len() as u32);
-                }
-            });
-    }
-
-    /// `true` when the list was built for as many points as `points` holds and none of them
-    /// has moved more than `drift` (minimum image across periodic axes) since.
-    pub fn holds(&self, points: &[V], drift: f64) -> bool {
-        largest_drift(&self.origin, points, &self.period).is_some_and(|d2| d2 <= drift * drift)
-    }
-
-    /// The points as they were at the build.
-    pub fn origin(&self) -> &[V] {
-        &self.origin
-    }
-
-    /// Number of points listed.
-    pub fn len(&self) -> usize {
-        self.origin.len()
-    }
-
-    /// Number of points whose candidates are listed (the first ones).
-    pub fn queries(&self) -> usize {
-        self.queries
-    }
-
-    /// `true` when no point is listed.
-    pub fn is_empty(&self) -> bool {
-        self.origin.is_empty()
-    }
-
-    /// Number of candidates listed for point `i` (0 for a point whose candidates are not
-    /// listed).
-    pub fn count(&self, i: usize) -> usize {
-        if i >= self.queries {
-            return 0;
-        }
-        let start = &self.blocks[i / Self::BLOCK].start;
-        let k = i % Self::BLOCK;
-        (start[k + 1] - start[k]) as usize
-    }
-
-    /// Number of candidate pairs listed.
-    pub fn candidates(&self) -> usize {
-        self.blocks.iter().map(|b| b.index.len()).sum()
-    }
-
-    /// Bytes held by the buffers (their capacities).
-    pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<V>() * self.origin.capacity()
-            + self
-                .blocks
-                .iter()
-                .map(|b| 4 * (b.start.capacity() + b.index.capacity()))
-                .sum::<usize>()
-    }
-
-    /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
-    /// periodic axes) for every candidate of point `i` with `|r_ij| < radius`, in the list's
-    /// order; `x` is `points[i]` ([`CandidateList::for_each_neighbour_run`], one at a time).
-    #[inline(always)]
-    pub fn for_each_neighbour(
-        &self,
-        i: usize,
-        x: V,
-        points: &[V],
-        radius: f64,
-        visit: impl FnMut(usize, V, f64),
-    ) {
-        let mut kept = KeptBlock::new();
-        self.for_each_neighbour_run(i, x, points, radius, &mut kept, one_at_a_time(visit));
-    }
-
-    /// Calls `visit(index, r_ij, r2)` with runs of the candidates of point `i` within
-    /// `radius`, in the list's order, as [`CellGrid::for_each_neighbour_run`] does; `x` is
-    /// `points[i]`.
-    #[inline(always)]
-    pub fn for_each_neighbour_run(
-        &self,
-        i: usize,
-        x: V,
-        points: &[V],
-        radius: f64,
-        kept: &mut KeptBlock<V>,
-        mut visit: impl FnMut(&[u32], &[V], &[f64]),
-    ) {
-        let r2max = radius * radius;
-        let block = &self.blocks[i / Self::BLOCK];
-        let k = i % Self::BLOCK;
-        let (s, e) = (block.start[k] as usize, block.start[k + 1] as usize);
-        let period = self.period;
-        for chunk in block.index[s..e].chunks(KEPT_BLOCK) {
-            let n = if period.any() {
-                kept.filter(
-                    chunk
-                        .iter()
-                        .map(|&j| (j, period.minimum_image(points[j as usize] - x))),
-                    r2max,
-                )
-            } else {
-                kept.filter(chunk.iter().map(|&j| (j, points[j as usize] - x)), r2max)
-            };
-            visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
-        }
-    }
-}
-
 /// The largest squared displacement from `origin` to `points` (minimum image across periodic
 /// axes), `None` when their lengths differ: a maximum, the same for any split into threads.
 fn largest_drift<V: Vector>(origin: &[V], points: &[V], period: &Periodicity<V>) -> Option<f64> {
@@ -1070,7 +885,7 @@ mod tests {
     use super::*;
     use glam::{DVec2, DVec3};
 
-    fn pseudo_random(n: usize, seed: u64) -> impl Iterator<Item = f64> {
+    pub(super) fn pseudo_random(n: usize, seed: u64) -> impl Iterator<Item = f64> {
         let mut s = seed;
         (0..n).map(move |_| {
             s = s
@@ -1366,84 +1181,6 @@ mod tests {
     /// periodic axes); without periodic axes the grid of the build still finds every point
     /// within `radius`;
     /// a move past half the skin is detected.
-    fn check_candidate_list<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
-        let skin = 0.2 * radius;
-        let points: Vec<V> = points.into_iter().map(|p| period.wrap(p)).collect();
-        let mut grid = CellGrid::with_period(radius + skin, period).unwrap();
-        grid.rebuild(&points);
-        let mut list = CandidateList::default();
-        list.rebuild(&grid, &points, radius + skin);
-        assert_eq!(list.len(), points.len());
-        for (i, &x) in points.iter().enumerate() {
-            let mut within = 0;
-            grid.for_each_neighbour(x, &points, radius + skin, |_, _, _| within += 1);
-            assert_eq!(list.count(i), within, "candidates of point {i}");
-        }
-        let counted: usize = (0..points.len() + 1).map(|i| list.count(i)).sum();
-        assert_eq!(counted, list.candidates());
-        let noise: Vec<f64> = pseudo_random(3 * points.len(), 11).collect();
-        let moved: Vec<V> = points
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| {
-                let mut d = V::ZERO;
-                for k in 0..V::DIM {
-                    d.set(k, noise[3 * i + k] - 0.5);
-                }
-                let d = d * (0.499 * skin / d.length().max(1e-300));
-                period.wrap(p + d)
-            })
-            .collect();
-        assert!(list.holds(&moved, 0.5 * skin));
-        let mut fresh = CellGrid::with_period(radius, period).unwrap();
-        fresh.rebuild(&moved);
-        let mut total = 0;
-        for (i, &x) in moved.iter().enumerate() {
-            let mut searched = Vec::new();
-            fresh.for_each_neighbour(x, &moved, radius, |j, r_ij, r| searched.push((j, r_ij, r)));
-            let mut stale = Vec::new();
-            grid.for_each_neighbour(x, &moved, radius, |j, _, _| stale.push(j));
-            let mut listed = Vec::new();
-            list.for_each_neighbour(i, x, &moved, radius, |j, r_ij, r| listed.push((j, r_ij, r)));
-            searched.sort_by_key(|e| e.0);
-            listed.sort_by_key(|e| e.0);
-            stale.sort_unstable();
-            assert_eq!(listed.len(), searched.len(), "point {i}");
-            let js: Vec<usize> = searched.iter().map(|e| e.0).collect();
-            // Without periodic axes (where moved points wrap) the grid of the build, whose
-            // cells are the listing radius wide, still holds every neighbour.
-            if !period.any() {
-                assert_eq!(stale, js, "point {i}");
-            }
-            for (a, b) in listed.iter().zip(&searched) {
-                assert_eq!(a.0, b.0);
-                if period.any() {
-                    assert!((a.1 - b.1).length() < 1e-12 && (a.2 - b.2).abs() < 1e-12);
-                } else {
-                    assert_eq!((a.1, a.2), (b.1, b.2));
-                }
-            }
-            total += listed.len();
-        }
-        assert!(list.candidates() >= total);
-        let m = points.len() / 2;
-        let mut far = points.clone();
-        let mut d = V::ZERO;
-        d.set(0, 0.51 * skin);
-        far[m] = period.wrap(far[m] + d);
-        assert!(!list.holds(&far, 0.5 * skin));
-        assert!(!list.holds(&points[1..], 0.5 * skin));
-    }
-
-    #[test]
-    fn candidate_list_finds_the_neighbours_after_moves_within_half_the_skin() {
-        let (p2, period2, p3, period3) = point_clouds(7);
-        check_candidate_list(p2.clone(), 0.07, Periodicity::none());
-        check_candidate_list(p2, 0.07, period2);
-        check_candidate_list(p3.clone(), 0.13, Periodicity::none());
-        check_candidate_list(p3, 0.13, period3);
-    }
-
     #[test]
     fn a_period_shorter_than_three_cells_is_refused() {
         let period = Periodicity {

@@ -3,7 +3,6 @@
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
 mod anderson;
-mod kept_neighbours;
 mod leaving;
 mod midpoint;
 mod part;
@@ -24,19 +23,18 @@ use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, PairList, Periodicity};
+use crate::neighbours::{CellGrid, ListedPairs, PairBlocks, PairList, Periodicity};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
     compute_rates, particle_operators, DensityDiffusion, DiffusionForm, DissipationRates,
-    FluidNeighbours, FluidSums, Gather, RateModel, Viscosity,
+    FluidNeighbours, FluidSums, RateModel, Viscosity,
 };
 use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
 use crate::walls::shepard::{Shepard, ShepardKind, WallContinuity};
 use crate::walls::usaw::Vertices;
 use crate::walls::{BoundaryElements, WallModel, Walls};
-use kept_neighbours::KeptNeighbours;
 use part_state::{BadParticle, Fault, HaloFields, Part};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -121,17 +119,17 @@ pub struct SimConfig<V: Vector> {
     /// curve) every this many steps (0 = never).
     pub reorder_interval: u64,
     /// Skin of the neighbour list kept across steps, as a fraction of the kernel support
-    /// (0 = search the cell grid at every step): candidates within `support (1 + skin)` are
-    /// listed and kept until a particle has moved half the skin
-    /// ([`crate::neighbours::CandidateList`]); the particles are reordered only when it is
-    /// rebuilt. The explicit scheme sweeps the candidates; the midpoint scheme lists its
-    /// pairs for a step from them. Not used when the list would exceed
+    /// (0 = search the cell grid at every step): the pairs within `support (1 + skin)` are
+    /// listed, each once, and kept until a particle has moved half the skin
+    /// ([`crate::neighbours::PairBlocks`]); the particles are reordered only when it is
+    /// rebuilt. The explicit scheme sweeps the pairs; the midpoint scheme lists them with
+    /// their kernel gradients for a step. Not used when the list would exceed
     /// [`CANDIDATE_LIST_BUDGET`].
     pub neighbour_skin: f64,
     /// Most bytes the listed pairs of a midpoint step (fluid pairs, and particle-element
-    /// pairs for the energy-conserving walls) may take; larger runs search the neighbours at
-    /// every iteration instead. The lists repeat the search in its order and bits, so results
-    /// do not depend on it, only the time.
+    /// pairs for the energy-conserving walls) may take; larger runs filter the Verlet list's
+    /// pairs, and search the wall elements, at every iteration instead. The lists repeat
+    /// those sweeps in their order and bits, so results do not depend on it, only the time.
     pub pair_list_budget: usize,
     /// Reflect particles about to cross a wall ([`crate::walls::bounce`]).
     pub elastic_bounce: bool,
@@ -163,8 +161,11 @@ struct Scratch<V> {
     permute: PermuteScratch<V>,
     /// The fluid pairs of the current positions, with kernel gradient factors, while
     /// `pairs_listed` (inside a midpoint step, see [`Simulation::list_pairs`]).
-    pairs: PairList<V>,
+    pairs: ListedPairs<V>,
     pairs_listed: bool,
+    /// The positions are frozen (inside a midpoint step) and the Verlet list holds the pairs
+    /// within the support at them (see [`Simulation::list_pairs`]).
+    pairs_frozen: bool,
     /// The particle-element and element-particle pairs of the current positions with the
     /// kernel values, while `wall_pairs_listed` (energy-conserving walls inside a midpoint
     /// step, see [`Simulation::list_pairs`]).
@@ -173,7 +174,7 @@ struct Scratch<V> {
     wall_pairs_listed: bool,
     /// The Verlet list (see [`SimConfig::neighbour_skin`]), valid while `candidates_valid`
     /// and no particle moved more than `skin / 2` since its build.
-    candidates: KeptNeighbours<V>,
+    candidates: PairBlocks<V>,
     /// The fluid sums of a sweep over the Verlet list's pairs.
     pair_sums: Vec<FluidSums<V>>,
     candidates_valid: bool,
@@ -186,8 +187,8 @@ struct Scratch<V> {
 /// [`SimConfig::pair_list_budget`] where the memory of the machine is not known.
 pub const PAIR_LIST_BUDGET: usize = 2 << 30;
 
-/// Most bytes the explicit scheme's Verlet list may take (4 per candidate); larger runs search
-/// the cell grid at every step instead.
+/// Most bytes the Verlet list may take (4 per pair, each pair once); larger runs search the
+/// cell grid at every step instead.
 pub const CANDIDATE_LIST_BUDGET: usize = 8 << 30;
 
 /// Estimated pairs within `radius` of `n` particles at the case's spacing (a lattice's count
@@ -279,7 +280,7 @@ impl<V: Vector> Simulation<V> {
         // The Verlet list needs fluid cells of the listing radius (when every period can
         // hold three of them).
         let skin = cell * config.neighbour_skin;
-        let list_bytes = 4.0 * listed_pairs(&config, fluid.len(), cell + skin);
+        let list_bytes = 2.0 * listed_pairs(&config, fluid.len(), cell + skin);
         let skin = if skin > 0.0 && list_bytes <= CANDIDATE_LIST_BUDGET as f64 {
             skin
         } else {
@@ -743,14 +744,9 @@ impl<V: Vector> Simulation<V> {
         let radius = self.config.kernel.support + skin;
         // A part lists its own particles' candidates: the halo takes the owners' rates.
         let queries = self.owned_len();
-        let pairs = self.config.integrator == Integrator::Verlet;
-        self.scratch.candidates.rebuild(
-            pairs,
-            &self.fluid_grid,
-            &self.fluid.position,
-            queries,
-            radius,
-        );
+        self.scratch
+            .candidates
+            .rebuild(&self.fluid_grid, &self.fluid.position, queries, radius);
         self.scratch.candidates_valid = true;
         self.scratch.use_candidates = true;
         self.wall_clearance
@@ -818,10 +814,9 @@ impl<V: Vector> Simulation<V> {
         self.fluid_grid.rebuild_keyed(origin, &self.fluid.id);
         let radius = self.config.kernel.support + skin;
         let queries = self.owned_len();
-        let pairs = self.config.integrator == Integrator::Verlet;
         self.scratch
             .candidates
-            .rebuild(pairs, &self.fluid_grid, origin, queries, radius);
+            .rebuild(&self.fluid_grid, origin, queries, radius);
         self.scratch.candidates_valid = true;
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
@@ -831,39 +826,37 @@ impl<V: Vector> Simulation<V> {
         true
     }
 
-    /// Lists the fluid pairs at the current positions with their kernel gradient factors,
-    /// for the rate evaluations until [`Simulation::forget_pairs`] (the iterations of a
-    /// midpoint step, whose positions and grid are frozen): they then skip the neighbour
-    /// search and give the same bits. The pairs come from the Verlet list while it holds,
-    /// else from the cell grid. Does nothing when the list would take more than
-    /// [`SimConfig::pair_list_budget`] bytes (estimated from the particle spacing, 25% over a
-    /// lattice).
+    /// Freezes the fluid pairs at the current positions for the rate evaluations until
+    /// [`Simulation::forget_pairs`] (the iterations of a midpoint step, whose positions and
+    /// grid are frozen): the Verlet list's pairs while it holds, else those within the
+    /// support from the cell grid; listed with their offsets and kernel gradient factors
+    /// unless the listed pairs would take more than [`SimConfig::pair_list_budget`] bytes
+    /// (estimated from the particle spacing, 25% over a lattice), filtered at each evaluation
+    /// otherwise, with the same bits.
     pub(crate) fn list_pairs(&mut self) {
         let start = Instant::now();
         let kernel = self.config.kernel;
-        let bytes = listed_pairs(&self.config, self.fluid.len(), kernel.support)
-            * PairList::<V>::PAIR_BYTES as f64;
-        if !bytes.is_finite() || bytes > self.config.pair_list_budget as f64 {
-            self.scratch.pairs_listed = false;
-            return;
-        }
         let owned = self.owned_len();
         let position = &self.fluid.position;
-        let factor = |r| kernel.gradient_factor(r);
         let s = &mut self.scratch;
-        let candidates = match &s.candidates {
-            KeptNeighbours::Candidates(list) if s.skin > 0.0 && s.candidates_valid => Some(list),
-            _ => None,
-        };
-        if let Some(candidates) = candidates.filter(|c| c.holds(position, 0.5 * s.skin)) {
-            s.pairs
-                .rebuild_from_candidates(candidates, position, kernel.support, factor);
-        } else {
+        if !(s.skin > 0.0 && s.candidates_valid && s.candidates.holds(position, 0.5 * s.skin)) {
             // The own particles' pairs: the halo takes its rates from the owners.
-            let queries = &position[..owned];
-            s.pairs
-                .rebuild(&self.fluid_grid, queries, position, kernel.support, factor);
+            s.candidates_valid = false;
+            s.candidates
+                .rebuild(&self.fluid_grid, position, owned, kernel.support);
         }
+        s.pairs_frozen = true;
+        // Each pair once.
+        let bytes = 0.5
+            * listed_pairs(&self.config, self.fluid.len(), kernel.support)
+            * ListedPairs::<V>::PAIR_BYTES as f64;
+        if !bytes.is_finite() || bytes > self.config.pair_list_budget as f64 {
+            self.timings.neighbours += start.elapsed().as_secs_f64();
+            return;
+        }
+        let factor = |r| kernel.gradient_factor(r);
+        s.candidates
+            .list(position, kernel.support, factor, &mut s.pairs);
         s.pairs_listed = true;
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
         // (once per side); a wetted element sees at most half a kernel sphere of particles.
@@ -891,6 +884,7 @@ impl<V: Vector> Simulation<V> {
 
     /// Rate evaluations search the neighbours again (call before the positions move).
     pub(crate) fn forget_pairs(&mut self) {
+        self.scratch.pairs_frozen = false;
         self.scratch.pairs_listed = false;
         self.scratch.wall_pairs_listed = false;
     }
@@ -946,16 +940,11 @@ impl<V: Vector> Simulation<V> {
         };
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         let neighbours = if self.scratch.pairs_listed {
-            FluidNeighbours::Gather(Gather::List(&self.scratch.pairs))
-        } else if self.scratch.use_candidates {
-            match &self.scratch.candidates {
-                KeptNeighbours::Candidates(list) => {
-                    FluidNeighbours::Gather(Gather::Candidates(list))
-                }
-                KeptNeighbours::Pairs(list) => FluidNeighbours::Pairs(list),
-            }
+            FluidNeighbours::Listed(&self.scratch.pairs)
+        } else if self.scratch.use_candidates || self.scratch.pairs_frozen {
+            FluidNeighbours::Pairs(&self.scratch.candidates)
         } else {
-            FluidNeighbours::Gather(Gather::Grid(grid))
+            FluidNeighbours::Grid(grid)
         };
         // The vertex values of the semi-analytical walls first (their pressures are the
         // segments' wall pressures).
@@ -1378,7 +1367,7 @@ impl<V: Vector> WallModelTask<V> for SkewResidual<'_, V> {
                     self.model,
                     wall_model,
                     state,
-                    Gather::Grid(self.fluid_grid),
+                    self.fluid_grid,
                     self.elements,
                     self.wall_grid,
                     i,

@@ -399,8 +399,8 @@ impl<V: Vector> Simulation<V> {
     fn work_weights(&self, n: usize) -> Vec<f64> {
         let s = &self.scratch;
         if s.candidates_valid && s.skin > 0.0 {
-            let counts = s.candidates.counts(n);
-            counts.into_iter().map(|c| 1.0 + c as f64).collect()
+            let counts = s.candidates.pair_counts();
+            counts[..n].iter().map(|&c| 1.0 + c as f64).collect()
         } else {
             vec![1.0; n]
         }

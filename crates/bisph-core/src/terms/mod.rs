@@ -2,8 +2,8 @@
 //!
 //! Each term lives in its own file as a pair function that gives both particles' shares;
 //! [`compute_rates`] fuses them into one pair loop and asks the wall model for the wall parts.
-//! Each particle either sums its own neighbours (a gather, [`Gather`]) or receives the shares
-//! of pairs evaluated once for both particles ([`PairBlocks`]); in both the order of each
+//! Each particle either sums its own neighbours (a gather) or receives the shares of pairs
+//! evaluated once for both particles ([`FluidNeighbours`]); in both the order of each
 //! particle's sum depends neither on the number of threads nor on the parts of a split run:
 //! - momentum, paper 1 eq 2: `du_i/dt = -(<grad p>_i^Omega + <grad p>_i^{dOmega}) / rho_i + g`,
 //!   plus the laminar viscosity of paper 3 eq 18 with its wall shear ([`viscosity`]) and a
@@ -17,7 +17,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CandidateList, CellGrid, KeptBlock, PairBlocks, PairList};
+use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, PairBlocks, RunValues};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -53,34 +53,22 @@ pub struct DissipationRates {
     pub diffusion: f64,
 }
 
-/// Where a particle finds its own fluid neighbours, to sum them itself. Both give the same
-/// neighbours in the same order with the same `r_ij` and kernel gradient factors, so the sums
-/// agree to the bit; one pair loop serves both ([`fluid_sums`]).
-#[derive(Clone, Copy, Debug)]
-pub enum Gather<'a, V: Vector> {
-    /// Searched in the cell grid of the fluid at every evaluation.
-    Grid(&'a CellGrid<V>),
-    /// Read from a list made by [`PairList::rebuild`] over the same grid and positions, with
-    /// the kernel gradient factor as its per-pair factor (the iterations of a midpoint step,
-    /// where the positions are frozen).
-    List(&'a PairList<V>),
-    /// Filtered from the candidates of a Verlet list ([`CandidateList`], still valid for the
-    /// positions): the same neighbours, in the list's order (the storage order when it was
-    /// built), so sums may differ from the grid's in the last bits (and `r_ij` too across
-    /// periodic axes, where it is the minimum image).
-    Candidates(&'a CandidateList<V>),
-}
-
 /// How a sweep meets the fluid pairs.
 #[derive(Clone, Copy, Debug)]
 pub enum FluidNeighbours<'a, V: Vector> {
-    /// Each particle sums its own neighbours.
-    Gather(Gather<'a, V>),
+    /// Each particle searches the cell grid of the fluid for its own neighbours and sums them
+    /// in the grid's storage order (a gather, [`fluid_sums`]).
+    Grid(&'a CellGrid<V>),
     /// Each pair of an explicit step's Verlet list ([`PairBlocks`], still valid for the
-    /// positions) is evaluated once and its shares added to both particles: the same pairs,
-    /// each particle's in the list's order, so sums may differ from a gather's in the last
-    /// bits (and `r_ij` too across periodic axes, where it is the minimum image).
+    /// positions) is evaluated once and its shares added to both particles (a scatter,
+    /// [`scattered_sums`]): the same pairs, each particle's in the list's order, so sums may
+    /// differ from the grid's in the last bits (and `r_ij` too across periodic axes, where
+    /// it is the minimum image).
     Pairs(&'a PairBlocks<V>),
+    /// The pairs of a [`PairBlocks`] listed with their offsets and kernel gradient factors at
+    /// frozen positions (the iterations of a midpoint step): the sums of
+    /// [`FluidNeighbours::Pairs`] at those positions, to the bit.
+    Listed(&'a ListedPairs<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -127,19 +115,20 @@ macro_rules! with_switches {
     };
 }
 
-/// Operators of particle `i` at the state `fluid`, its neighbours gathered by `neighbours`.
+/// Operators of particle `i` at the state `fluid`, its neighbours searched in `grid` (the
+/// cell grid of `fluid`'s positions).
 pub fn particle_operators<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
     wall_model: &W,
     fluid: &FluidState<V>,
-    neighbours: Gather<'_, V>,
+    grid: &CellGrid<V>,
     elements: &BoundaryElements<V>,
     wall_grid: &CellGrid<V>,
     i: usize,
 ) -> Operators<V> {
     let mut kept = KeptBlock::new();
     let switches = sum_switches(model, wall_model);
-    let sums = with_switches!(switches, fluid_sums(model, fluid, neighbours, &mut kept, i));
+    let sums = with_switches!(switches, fluid_sums(model, fluid, grid, &mut kept, i));
     operators_with(model, (wall_model, elements, wall_grid), fluid, &sums, i)
 }
 
@@ -392,40 +381,8 @@ fn pair_shares<
     ]
 }
 
-/// Adds a run of neighbours `index[k]` of `i` (values `a`) with offsets `r_ij[k]`, `(|r_ij|,
-/// F) = r_f(k)`, to the sums of `i`. The run is summed into a copy of the sums (held in
-/// registers, not in memory) that replaces them at its end: the pair order and so the bits
-/// are those of one running sum.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn gather_run<
-    V: Vector,
-    const WEIGHTED: bool,
-    const DIFFUSE: bool,
-    const VISCID: bool,
-    const SHEPARD: bool,
->(
-    model: &RateModel<V>,
-    values: &PairValues<'_, V>,
-    a: &Side<V>,
-    sums: &mut FluidSums<V>,
-    index: &[u32],
-    r_ij: &[V],
-    r_f: impl Fn(usize) -> (f64, f64),
-) {
-    let mut run = *sums;
-    for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
-        let (r, f) = r_f(k);
-        let b = values.side(j as usize);
-        let [share, _] =
-            pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, a, &b, r_ij, r, f);
-        run.add::<DIFFUSE, VISCID, SHEPARD>(&share);
-    }
-    *sums = run;
-}
-
-/// The fluid-neighbour sums of particle `i` ([`pair_shares`]), in the grid's storage order
-/// of the neighbours, searched or listed ([`Gather`]).
+/// The fluid-neighbour sums of particle `i` ([`pair_shares`]), its neighbours searched in
+/// `grid` and summed in the grid's storage order.
 #[inline(never)]
 fn fluid_sums<
     V: Vector,
@@ -436,7 +393,7 @@ fn fluid_sums<
 >(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    neighbours: Gather<'_, V>,
+    grid: &CellGrid<V>,
     kept: &mut KeptBlock<V>,
     i: usize,
 ) -> FluidSums<V> {
@@ -445,67 +402,69 @@ fn fluid_sums<
     let position = &fluid.position[..values.velocity.len()];
     let a = values.side(i);
     let mut sums = FluidSums::ZERO;
-    match neighbours {
-        Gather::Grid(grid) => grid.for_each_neighbour_run(
-            position[i],
-            position,
-            kernel.support,
-            kept,
-            |index, r_ij, r2| {
-                gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                    model,
-                    &values,
-                    &a,
-                    &mut sums,
-                    index,
-                    r_ij,
-                    |k| {
-                        let r = r2[k].sqrt();
-                        (r, kernel.gradient_factor_within(r))
-                    },
-                )
-            },
-        ),
-        Gather::Candidates(list) => list.for_each_neighbour_run(
-            i,
-            position[i],
-            position,
-            kernel.support,
-            kept,
-            |index, r_ij, r2| {
-                gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                    model,
-                    &values,
-                    &a,
-                    &mut sums,
-                    index,
-                    r_ij,
-                    |k| {
-                        let r = r2[k].sqrt();
-                        (r, kernel.gradient_factor_within(r))
-                    },
-                )
-            },
-        ),
-        // `|r_ij|` as the search computes it (the root of `r_ij . r_ij`), the same bits.
-        Gather::List(list) => {
-            let (index, r_ij, factor) = list.neighbours(i);
-            gather_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                model,
-                &values,
-                &a,
-                &mut sums,
-                index,
-                r_ij,
-                |k| (r_ij[k].length(), factor[k]),
-            )
-        }
-    }
+    grid.for_each_neighbour_run(
+        position[i],
+        position,
+        kernel.support,
+        kept,
+        |index, r_ij, r2| {
+            let mut run = sums;
+            for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
+                let r = r2[k].sqrt();
+                let f = kernel.gradient_factor_within(r);
+                let b = values.side(j as usize);
+                let [share, _] =
+                    pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, &a, &b, r_ij, r, f);
+                run.add::<DIFFUSE, VISCID, SHEPARD>(&share);
+            }
+            // Summed in registers over the run, the bits of one running sum.
+            sums = run;
+        },
+    );
     sums
 }
 
-/// The fluid sums of every listed particle into `sums`, each pair of `pairs` evaluated once
-/// and its shares ([`pair_shares`]) added to both particles.
+/// Adds the shares of the pairs of `i` with `index[k]` (offsets `r_ij[k]`, `(|r_ij|, F) =
+/// r_f(k)`) to the sums of both particles ([`pair_shares`]); `i`'s are summed in registers
+/// over the run, the bits of one running sum.
+#[inline(always)]
+fn scatter_run<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
+    model: &RateModel<V>,
+    values: &PairValues<'_, V>,
+    (i, run): (usize, &mut RunValues<'_, FluidSums<V>>),
+    index: &[u32],
+    r_ij: &[V],
+    r_f: impl Fn(usize) -> (f64, f64),
+) {
+    let a = values.side(i);
+    let mut own = *run.first();
+    for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
+        let (r, f) = r_f(k);
+        let b = values.side(j as usize);
+        let [to_i, to_j] =
+            pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, &a, &b, r_ij, r, f);
+        own.add::<DIFFUSE, VISCID, SHEPARD>(&to_i);
+        run.partner(k).add::<DIFFUSE, VISCID, SHEPARD>(&to_j);
+    }
+    *run.first() = own;
+}
+
+/// The pairs of a scatter: a Verlet list filtered at the positions, or its listed pairs.
+#[derive(Clone, Copy)]
+enum Scattered<'a, V> {
+    Filtered(&'a PairBlocks<V>),
+    Listed(&'a ListedPairs<V>),
+}
+
+/// The fluid sums of every listed particle into `sums`, each pair of a Verlet list (filtered
+/// at the positions) or of its listed pairs evaluated once and its shares added to both
+/// particles.
 #[inline(never)]
 fn scattered_sums<
     V: Vector,
@@ -516,7 +475,7 @@ fn scattered_sums<
 >(
     model: &RateModel<V>,
     fluid: &FluidState<V>,
-    pairs: &PairBlocks<V>,
+    neighbours: Scattered<'_, V>,
     sums: &mut [FluidSums<V>],
 ) {
     let kernel = &model.kernel;
@@ -524,25 +483,37 @@ fn scattered_sums<
     sums.par_iter_mut()
         .with_min_len(4096)
         .for_each(|s| *s = FluidSums::ZERO);
-    pairs.sweep(
-        fluid.position,
-        kernel.support,
-        sums,
-        |i, run, index, r_ij, r2| {
-            let a = values.side(i);
-            let mut own = *run.first();
-            for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
-                let r = r2[k].sqrt();
-                let f = kernel.gradient_factor_within(r);
-                let b = values.side(j as usize);
-                let [to_i, to_j] =
-                    pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, &a, &b, r_ij, r, f);
-                own.add::<DIFFUSE, VISCID, SHEPARD>(&to_i);
-                run.partner(k).add::<DIFFUSE, VISCID, SHEPARD>(&to_j);
-            }
-            *run.first() = own;
-        },
-    );
+    match neighbours {
+        Scattered::Filtered(pairs) => pairs.sweep(
+            fluid.position,
+            kernel.support,
+            sums,
+            |i, run, index, r_ij, r2| {
+                scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    model,
+                    &values,
+                    (i, run),
+                    index,
+                    r_ij,
+                    |k| {
+                        let r = r2[k].sqrt();
+                        (r, kernel.gradient_factor_within(r))
+                    },
+                )
+            },
+        ),
+        // `|r_ij|` as the filter computes it (the root of `r_ij . r_ij`), the same bits.
+        Scattered::Listed(listed) => listed.sweep(sums, |i, run, index, r_ij, factor| {
+            scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                model,
+                &values,
+                (i, run),
+                index,
+                r_ij,
+                |k| (r_ij[k].length(), factor[k]),
+            )
+        }),
+    }
 }
 
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
@@ -563,7 +534,12 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     pair_sums: &mut Vec<FluidSums<V>>,
 ) {
     let switches = sum_switches(model, wall_model);
-    if let FluidNeighbours::Pairs(pairs) = neighbours {
+    let scattered = match neighbours {
+        FluidNeighbours::Grid(_) => None,
+        FluidNeighbours::Pairs(pairs) => Some(Scattered::Filtered(pairs)),
+        FluidNeighbours::Listed(listed) => Some(Scattered::Listed(listed)),
+    };
+    if let Some(pairs) = scattered {
         pair_sums.resize(fluid.position.len(), FluidSums::ZERO);
         with_switches!(switches, scattered_sums(model, fluid, pairs, pair_sums));
     }
@@ -576,10 +552,10 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         .with_min_len(256)
         .for_each_init(KeptBlock::new, |kept, (i, (a, (drho, dissipation)))| {
             let sums = match neighbours {
-                FluidNeighbours::Pairs(_) => pair_sums[i],
-                FluidNeighbours::Gather(gather) => {
-                    with_switches!(switches, fluid_sums(model, fluid, gather, kept, i))
+                FluidNeighbours::Grid(grid) => {
+                    with_switches!(switches, fluid_sums(model, fluid, grid, kept, i))
                 }
+                _ => pair_sums[i],
             };
             let walls = (wall_model, elements, wall_grid);
             let op = operators_with(model, walls, fluid, &sums, i);
