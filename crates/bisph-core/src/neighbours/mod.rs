@@ -5,6 +5,10 @@
 //! allocation once the buffers have grown; cell indices are computed in parallel); for the fluid the sort order is also used to
 //! reorder the particles themselves, so a cell's particles are contiguous in memory.
 //!
+//! **Each pair once.** The fluid's Verlet list ([`PairBlocks`]) holds each pair once, in
+//! blocks of cells that a sweep takes class by class, so that a pair is evaluated once for
+//! both of its particles without two threads writing one particle.
+//!
 //! **Storage order.** Points are sorted by *row* of cells (the cells sharing `y` and `z`),
 //! rows in the order of a Morton (Z-order) curve over `(y, z)` (plain row order in 2-D), and
 //! by cell along `x` within a row. A run of consecutive cells along `x` is then one contiguous
@@ -1175,12 +1179,6 @@ mod tests {
         check_pair_list(p3, 0.15, period3);
     }
 
-    /// A Verlet list built at `points` with a skin, then every point moved by up to half the
-    /// skin (wrapped into the period): the candidates filtered at the moved points give the
-    /// same neighbours as a search of a fresh grid, with the same `r` (the same bits without
-    /// periodic axes); without periodic axes the grid of the build still finds every point
-    /// within `radius`;
-    /// a move past half the skin is detected.
     #[test]
     fn a_period_shorter_than_three_cells_is_refused() {
         let period = Periodicity {
