@@ -21,7 +21,7 @@
 //! with the same keys in the same lattice cells, so every own particle meets its pairs in
 //! the order of the whole run.
 
-use super::{CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use super::grid::{largest_drift, CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
 use crate::dim::Vector;
 use rayon::prelude::*;
 
@@ -141,8 +141,7 @@ impl<V: Vector> PairBlocks<V> {
     /// `true` when the list was built for as many points as `points` holds and none of them
     /// has moved more than `drift` (minimum image across periodic axes) since.
     pub fn holds(&self, points: &[V], drift: f64) -> bool {
-        super::largest_drift(&self.origin, points, &self.period)
-            .is_some_and(|d2| d2 <= drift * drift)
+        largest_drift(&self.origin, points, &self.period).is_some_and(|d2| d2 <= drift * drift)
     }
 
     /// The points as they were at the build.
@@ -488,7 +487,7 @@ impl BlockChunk {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::neighbours::tests::{point_clouds, pseudo_random};
+    use crate::neighbours::grid::tests::{point_clouds, pseudo_random};
     use std::collections::BTreeSet;
 
     /// The keys of each point's partners within `radius` at the positions `at`, in the order
