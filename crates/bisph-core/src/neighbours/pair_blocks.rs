@@ -159,11 +159,6 @@ impl<V: Vector> PairBlocks<V> {
         self.origin.is_empty()
     }
 
-    /// Number of pairs listed.
-    pub fn pairs(&self) -> usize {
-        self.classes.iter().flatten().map(|c| c.second.len()).sum()
-    }
-
     /// Number of pairs listed of each point (as first or second particle).
     pub fn pair_counts(&self) -> Vec<u32> {
         let mut counts = vec![0u32; self.origin.len()];
@@ -177,20 +172,6 @@ impl<V: Vector> PairBlocks<V> {
             }
         }
         counts
-    }
-
-    /// Bytes held by the buffers (their capacities).
-    pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<V>() * self.origin.capacity()
-            + self
-                .classes
-                .iter()
-                .flatten()
-                .map(|c| {
-                    12 * c.anchors.capacity()
-                        + 4 * (c.first.capacity() + c.start.capacity() + c.second.capacity())
-                })
-                .sum::<usize>()
     }
 
     /// Sweeps the listed pairs within `radius` at the positions `points`: for each first
@@ -272,19 +253,6 @@ impl<V: Vector> ListedPairs<V> {
     /// Number of pairs listed.
     pub fn pairs(&self) -> usize {
         self.classes.iter().flatten().map(|c| c.second.len()).sum()
-    }
-
-    /// Bytes held by the buffers (their capacities).
-    pub fn memory_bytes(&self) -> usize {
-        self.classes
-            .iter()
-            .flatten()
-            .map(|c| {
-                4 * (c.first.capacity() + c.start.capacity() + c.second.capacity())
-                    + std::mem::size_of::<V>() * c.offset.capacity()
-                    + 8 * c.factor.capacity()
-            })
-            .sum()
     }
 
     /// [`PairBlocks::sweep`] over the listed pairs: `visit(i, values, index, r_ij, factor)`
