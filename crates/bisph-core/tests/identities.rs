@@ -5,7 +5,7 @@
 use bisph_core::eos::Eos;
 use bisph_core::geometry::{box_elements_2d, box_elements_3d, polyline_elements, ElementShape};
 use bisph_core::kernel::Wendland;
-use bisph_core::neighbours::CellGrid;
+use bisph_core::neighbours::{CellGrid, Nearby};
 use bisph_core::particles::FluidState;
 use bisph_core::terms::{particle_operators, DensityDiffusion, DiffusionForm, RateModel};
 use bisph_core::walls::energy_bi::{wall_pressure, EnergyConservingWalls};
@@ -145,7 +145,7 @@ fn powers<V: Vector>(
         scale += volume
             * (u.length() * op.pressure_gradient.length() + (p * op.velocity_divergence).abs());
     }
-    wall_pressure(&kernel, elements, &view, &grid);
+    wall_pressure(&kernel, elements, &view, Nearby::grid(&grid));
     let f_dot_u: f64 = (0..elements.len())
         .map(|j| {
             elements.pressure[j] * elements.area[j] * elements.normal[j].dot(elements.velocity[j])

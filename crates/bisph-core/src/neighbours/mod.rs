@@ -1,5 +1,5 @@
 //! Fixed-radius neighbour search: a uniform cell grid ([`CellGrid`]) and the fluid's Verlet
-//! list ([`PairBlocks`]).
+//! list ([`PairBlocks`]), and the Verlet list between two point sets ([`CandidateRows`]).
 //!
 //! Cells have the side of the kernel support, so every neighbour of a point lies in the
 //! `3^d` cells around it. The grid is rebuilt every step by a counting sort (no per-step
@@ -26,8 +26,11 @@
 //! terms never see a raw position difference across the period. Stored points must lie in
 //! the primary period (see [`Periodicity::wrap`]); periods must hold at least three cells.
 
+mod candidate_rows;
 mod grid;
 mod pair_blocks;
+
+pub use candidate_rows::{CandidateRows, Nearby};
 
 pub use grid::{CellGrid, KeptBlock, PairList, Periodicity};
 pub use pair_blocks::{ListedPairs, PairBlocks, RunValues};

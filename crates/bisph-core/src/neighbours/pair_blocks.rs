@@ -380,11 +380,31 @@ impl BlockChunk {
         r2max: f64,
         period: &Periodicity<V>,
     ) {
+        if period.any() {
+            self.fill_with(grid, points, owned, r2max, |d| period.minimum_image(d));
+        } else {
+            self.fill_with(grid, points, owned, r2max, |d| d);
+        }
+    }
+
+    /// [`BlockChunk::fill`] with `image` mapping a displacement to the one that counts (the
+    /// minimum image across periodic axes). The candidates of a cell are kept without a
+    /// branch per candidate, in blocks of [`KEPT_BLOCK`].
+    #[inline(always)]
+    fn fill_with<V: Vector>(
+        &mut self,
+        grid: &CellGrid<V>,
+        points: &[V],
+        owned: usize,
+        r2max: f64,
+        image: impl Fn(V) -> V,
+    ) {
         self.first.clear();
         self.start.clear();
         self.second.clear();
         self.start.push(0);
         let corners = 1usize << V::DIM;
+        let mut kept = [0u32; KEPT_BLOCK];
         for a in &self.anchors {
             let cells = grid.block_cells(*a);
             for d in 0..corners {
@@ -392,20 +412,21 @@ impl BlockChunk {
                 for s in s0..s1 {
                     let p = grid.items[s] as usize;
                     let x = points[p];
-                    let halo = p >= owned;
+                    // A halo particle keeps only partners below `owned`.
+                    let last = if p >= owned { owned as u32 } else { u32::MAX };
                     for (d2, &(t0, t1)) in cells.iter().enumerate().take(corners).skip(d) {
                         if d2 & d != 0 {
                             continue;
                         }
                         let from = if d2 == d { s + 1 } else { t0 };
-                        for &q in &grid.items[from..t1] {
-                            if halo && q as usize >= owned {
-                                continue;
+                        for candidates in grid.items[from..t1].chunks(KEPT_BLOCK) {
+                            let mut n = 0usize;
+                            for &q in candidates {
+                                let r2 = image(points[q as usize] - x).length_squared();
+                                kept[n % KEPT_BLOCK] = q;
+                                n += usize::from((r2 < r2max) & (q < last));
                             }
-                            let r = period.minimum_image(points[q as usize] - x);
-                            if r.length_squared() < r2max {
-                                self.second.push(q);
-                            }
+                            self.second.extend_from_slice(&kept[..n]);
                         }
                     }
                     if self.second.len() > *self.start.last().unwrap() as usize {

@@ -23,7 +23,9 @@ use crate::eos::Eos;
 use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, ListedPairs, PairBlocks, PairList, Periodicity};
+use crate::neighbours::{
+    CandidateRows, CellGrid, ListedPairs, Nearby, PairBlocks, PairList, Periodicity,
+};
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
@@ -182,6 +184,13 @@ struct Scratch<V> {
     use_candidates: bool,
     /// Absolute skin length (0: no list).
     skin: f64,
+    /// The wall elements near each own particle and the particles near each element, listed
+    /// with the Verlet list at the same positions (fixed walls only, see
+    /// [`Simulation::list_wall_candidates`]); valid while `wall_rows_valid` and the Verlet
+    /// list is.
+    particle_element_rows: CandidateRows<V>,
+    element_particle_rows: CandidateRows<V>,
+    wall_rows_valid: bool,
 }
 
 /// [`SimConfig::pair_list_budget`] where the memory of the machine is not known.
@@ -749,6 +758,7 @@ impl<V: Vector> Simulation<V> {
             .rebuild(&self.fluid_grid, &self.fluid.position, queries, radius);
         self.scratch.candidates_valid = true;
         self.scratch.use_candidates = true;
+        self.list_wall_candidates(None);
         self.wall_clearance
             .measure(&self.walls, &self.fluid.position, 0.5 * skin);
         self.timings.neighbours += start.elapsed().as_secs_f64();
@@ -768,6 +778,37 @@ impl<V: Vector> Simulation<V> {
         } else {
             self.rebuild_grid(reorder);
         }
+    }
+
+    /// Lists, beside the Verlet list, the wall elements within the walls' reach plus the skin
+    /// of each own particle and the particles within the support plus the skin of each
+    /// element, at the positions `origin` of the list's build (the current positions when
+    /// `None`): the wall terms and wall pressures then filter these instead of searching the
+    /// grids. Only for the boundary-integral walls, and only where the walls are fixed (the
+    /// list's check follows the particles alone).
+    fn list_wall_candidates(&mut self, origin: Option<&[V]>) {
+        let reach = match self.config.wall_model {
+            WallModelChoice::Energy => self.config.kernel.support,
+            WallModelChoice::ShepardBi(_, quadrature) => {
+                quadrature.reach(self.config.kernel.support, self.walls.elements.max_reach)
+            }
+            WallModelChoice::Usaw(_) => 0.0,
+        };
+        let owned = self.owned_len();
+        let s = &mut self.scratch;
+        s.wall_rows_valid = false;
+        let walls = &self.walls;
+        if reach == 0.0 || walls.elements.is_empty() || walls.has_moving_bodies() {
+            return;
+        }
+        let position = origin.unwrap_or(&self.fluid.position);
+        let centres = &walls.elements.centre;
+        s.particle_element_rows
+            .rebuild(&walls.grid, &position[..owned], centres, reach, s.skin);
+        let support = self.config.kernel.support;
+        s.element_particle_rows
+            .rebuild(&self.fluid_grid, centres, position, support, s.skin);
+        s.wall_rows_valid = true;
     }
 
     /// Lower bounds of the particles' distances to the walls: with fixed walls and a Verlet
@@ -818,6 +859,7 @@ impl<V: Vector> Simulation<V> {
             .candidates
             .rebuild(&self.fluid_grid, origin, queries, radius);
         self.scratch.candidates_valid = true;
+        self.list_wall_candidates(Some(origin));
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
         if period.any() {
             self.fluid_grid
@@ -908,6 +950,10 @@ impl<V: Vector> Simulation<V> {
         // The halo takes its rates from the owners afterwards.
         let owned = self.owned_len();
         self.mark_elements_in_reach();
+        // The wall candidates hold where the Verlet list they were listed with does.
+        let s = &self.scratch;
+        let wall_rows =
+            s.wall_rows_valid && s.candidates_valid && (s.use_candidates || s.pairs_frozen);
         let Fluid {
             position,
             mass,
@@ -976,10 +1022,16 @@ impl<V: Vector> Simulation<V> {
         let sweep = Sweep {
             model: &model,
             state: &state,
-            fluid_grid: grid,
+            fluid_near: Nearby {
+                grid,
+                listed: wall_rows.then_some(&self.scratch.element_particle_rows),
+            },
             neighbours,
             elements,
-            wall_grid,
+            wall_near: Nearby {
+                grid: wall_grid,
+                listed: wall_rows.then_some(&self.scratch.particle_element_rows),
+            },
             acceleration: &mut acceleration[..owned],
             density_rate: &mut density_rate[..owned],
             dissipation: &mut dissipation[..owned],
@@ -1311,10 +1363,12 @@ pub(crate) fn advance_gamma<V: Vector>(
 struct Sweep<'a, V: Vector> {
     model: &'a RateModel<V>,
     state: &'a FluidState<'a, V>,
-    fluid_grid: &'a CellGrid<V>,
+    /// Finds the particles near an element.
+    fluid_near: Nearby<'a, V>,
     neighbours: FluidNeighbours<'a, V>,
     elements: &'a mut BoundaryElements<V>,
-    wall_grid: &'a CellGrid<V>,
+    /// Finds the elements near a particle.
+    wall_near: Nearby<'a, V>,
     acceleration: &'a mut [V],
     density_rate: &'a mut [f64],
     dissipation: &'a mut [DissipationRates],
@@ -1327,7 +1381,7 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
     fn run<W: WallModel<V>>(self, wall_model: &W) -> f64 {
         let start = Instant::now();
         let kernel = &self.model.kernel;
-        wall_model.update_wall_pressure(kernel, self.elements, self.state, self.fluid_grid);
+        wall_model.update_wall_pressure(kernel, self.elements, self.state, self.fluid_near);
         let wall_seconds = start.elapsed().as_secs_f64();
         compute_rates(
             self.model,
@@ -1335,7 +1389,7 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
             self.state,
             self.neighbours,
             self.elements,
-            self.wall_grid,
+            self.wall_near,
             self.acceleration,
             self.density_rate,
             self.dissipation,

@@ -17,7 +17,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, PairBlocks, RunValues};
+use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, Nearby, PairBlocks, RunValues};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -129,7 +129,8 @@ pub fn particle_operators<V: Vector, W: WallModel<V>>(
     let mut kept = KeptBlock::new();
     let switches = sum_switches(model, wall_model);
     let sums = with_switches!(switches, fluid_sums(model, fluid, grid, &mut kept, i));
-    operators_with(model, (wall_model, elements, wall_grid), fluid, &sums, i)
+    let walls = (wall_model, elements, Nearby::grid(wall_grid));
+    operators_with(model, walls, fluid, &sums, i)
 }
 
 /// Which fluid sums a sweep adds: `[weighted, diffuse, viscid, shepard]`.
@@ -146,7 +147,7 @@ fn sum_switches<V: Vector, W: WallModel<V>>(model: &RateModel<V>, wall_model: &W
 #[inline(always)]
 fn operators_with<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
-    (wall_model, elements, wall_grid): (&W, &BoundaryElements<V>, &CellGrid<V>),
+    (wall_model, elements, wall_near): (&W, &BoundaryElements<V>, Nearby<'_, V>),
     fluid: &FluidState<V>,
     sums: &FluidSums<V>,
     i: usize,
@@ -174,9 +175,9 @@ fn operators_with<V: Vector, W: WallModel<V>>(
         p: p_i,
         rho: rho_i,
     };
-    let wall = wall_model.particle_terms(kernel, &view, elements, wall_grid);
+    let wall = wall_model.particle_terms(kernel, &view, elements, wall_near);
     let wall_viscous = if viscid {
-        wall_model.wall_viscous(kernel, &viscosity, x_i, u_i, elements, wall_grid)
+        wall_model.wall_viscous(kernel, &viscosity, &view, elements, wall_near)
     } else {
         V::ZERO
     };
@@ -214,7 +215,7 @@ fn operators_with<V: Vector, W: WallModel<V>>(
     // Paper 3 eq 18 divides the Laplacian by gamma_i, the kernel's integral over the fluid;
     // models that do not renormalise supply it ([`WallModel::laplacian_gamma`]).
     let (viscous, wall_viscous) = if viscid {
-        let gamma = wall_model.laplacian_gamma(kernel, x_i, elements, wall_grid);
+        let gamma = wall_model.laplacian_gamma(kernel, x_i, elements, wall_near.grid);
         if gamma > 0.0 && gamma != 1.0 {
             (viscous / gamma, wall_viscous / gamma)
         } else {
@@ -519,7 +520,8 @@ fn scattered_sums<
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
 /// into `acceleration` and `density_rate`, in parallel; `dissipation` receives each
 /// particle's [`DissipationRates`] (zero for a term that is off). `pair_sums` holds the fluid
-/// sums of a sweep over [`FluidNeighbours::Pairs`].
+/// sums of a sweep over [`FluidNeighbours::Pairs`]; `wall_near` finds the elements near a
+/// particle.
 #[allow(clippy::too_many_arguments)]
 pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -527,7 +529,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     fluid: &FluidState<V>,
     neighbours: FluidNeighbours<'_, V>,
     elements: &BoundaryElements<V>,
-    wall_grid: &CellGrid<V>,
+    wall_near: Nearby<'_, V>,
     acceleration: &mut [V],
     density_rate: &mut [f64],
     dissipation: &mut [DissipationRates],
@@ -557,7 +559,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
                 }
                 _ => pair_sums[i],
             };
-            let walls = (wall_model, elements, wall_grid);
+            let walls = (wall_model, elements, wall_near);
             let op = operators_with(model, walls, fluid, &sums, i);
             let rho = fluid.density[i];
             let viscous = op.viscous + op.wall_viscous;

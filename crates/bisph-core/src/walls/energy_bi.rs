@@ -11,7 +11,7 @@
 use super::{geometric_shepard, BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, PairList};
+use crate::neighbours::{CellGrid, Nearby, PairList};
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
@@ -39,9 +39,9 @@ impl<V: Vector> WallModel<V> for EnergyConservingWalls {
         kernel: &Wendland,
         elements: &mut BoundaryElements<V>,
         fluid: &FluidState<V>,
-        fluid_grid: &CellGrid<V>,
+        fluid_near: Nearby<'_, V>,
     ) {
-        wall_pressure(kernel, elements, fluid, fluid_grid);
+        wall_pressure(kernel, elements, fluid, fluid_near);
     }
 
     #[inline(always)]
@@ -50,10 +50,10 @@ impl<V: Vector> WallModel<V> for EnergyConservingWalls {
         kernel: &Wendland,
         a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
+        near: Nearby<'_, V>,
     ) -> WallTerms<V> {
         let mut sums = ElementSums::new(a.u);
-        grid.for_each_sparse_neighbour(a.x, &elements.centre, kernel.support, |j, _, r| {
+        near.for_each(a.index, a.x, &elements.centre, kernel.support, |j, _, r| {
             sums.add(elements, j, kernel.value(r))
         });
         sums.terms(a.p)
@@ -160,7 +160,7 @@ impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
         _kernel: &Wendland,
         elements: &mut BoundaryElements<V>,
         fluid: &FluidState<V>,
-        _fluid_grid: &CellGrid<V>,
+        _fluid_near: Nearby<'_, V>,
     ) {
         wall_pressure_over(
             elements,
@@ -175,7 +175,7 @@ impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
         _kernel: &Wendland,
         a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        _grid: &CellGrid<V>,
+        _near: Nearby<'_, V>,
     ) -> WallTerms<V> {
         let mut sums = ElementSums::new(a.u);
         self.particle_elements
@@ -186,27 +186,28 @@ impl<V: Vector> WallModel<V> for ListedEnergyWalls<'_, V> {
 
 /// Paper 1, eq 71: `P_j = 2 sum_i p_i W_ij V_i` for every element in reach
 /// ([`BoundaryElements::in_reach`]), written into `elements.pressure` (gathered per element,
-/// in parallel).
+/// in parallel); `fluid_near` finds the particles near an element.
 pub fn wall_pressure<V: Vector>(
     kernel: &Wendland,
     elements: &mut BoundaryElements<V>,
     fluid: &FluidState<V>,
-    fluid_grid: &CellGrid<V>,
+    fluid_near: Nearby<'_, V>,
 ) {
-    let near = ElementNeighbours::Grid {
+    let near = ElementNeighbours::Search {
         kernel,
-        grid: fluid_grid,
+        near: fluid_near,
     };
     wall_pressure_over(elements, fluid, near);
 }
 
-/// Where eq 71 finds the particles within an element's support: a search of the fluid grid,
-/// or the element-particle pairs listed for a midpoint step (same order, same `W_ij` bits).
+/// Where eq 71 finds the particles within an element's support: a search (of the fluid grid
+/// or of the element's candidates), or the element-particle pairs listed for a midpoint step
+/// (same order, same `W_ij` bits).
 #[derive(Clone, Copy)]
 enum ElementNeighbours<'a, V: Vector> {
-    Grid {
+    Search {
         kernel: &'a Wendland,
-        grid: &'a CellGrid<V>,
+        near: Nearby<'a, V>,
     },
     List(&'a PairList<V>),
 }
@@ -229,12 +230,11 @@ fn wall_pressure_over<V: Vector>(
             let mut sum = 0.0;
             let mut add = |i: usize, w: f64| sum += fluid.pressure[i] * fluid.volume[i] * w;
             match near {
-                ElementNeighbours::Grid { kernel, grid } => grid.for_each_neighbour(
-                    centres[j],
-                    fluid.position,
-                    kernel.support,
-                    |i, _, r| add(i, kernel.value(r)),
-                ),
+                ElementNeighbours::Search { kernel, near } => {
+                    near.for_each(j, centres[j], fluid.position, kernel.support, |i, _, r| {
+                        add(i, kernel.value(r))
+                    })
+                }
                 ElementNeighbours::List(list) => list.for_each(j, |i, _, w| add(i, w)),
             }
             *pj = 2.0 * sum;

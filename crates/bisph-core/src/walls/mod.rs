@@ -19,7 +19,7 @@ use crate::bodies::{self, Body, Kinematics, Motion, Piston};
 use crate::decomposition::ExactSum;
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, Periodicity};
+use crate::neighbours::{CellGrid, Nearby, Periodicity};
 use crate::particles::FluidState;
 use crate::terms::viscosity::Viscosity;
 use glam::DVec3;
@@ -674,13 +674,14 @@ pub trait WallModel<V: Vector>: Sync {
 
     /// Refreshes `elements.pressure`, the wall pressure used for forces and, where the model
     /// needs it, in the wall terms, of at least the elements in reach
-    /// ([`BoundaryElements::in_reach`]). Called before every rate sweep.
+    /// ([`BoundaryElements::in_reach`]). Called before every rate sweep; `fluid_near` finds
+    /// the particles near an element (queried by the element's index).
     fn update_wall_pressure(
         &self,
         kernel: &Wendland,
         elements: &mut BoundaryElements<V>,
         fluid: &FluidState<V>,
-        fluid_grid: &CellGrid<V>,
+        fluid_near: Nearby<'_, V>,
     );
 
     /// Whether [`WallModel::renormalisation`] reads the discrete sum `sum_j W_ij V_j`, so the
@@ -718,31 +719,37 @@ pub trait WallModel<V: Vector>: Sync {
         &self,
         kernel: &Wendland,
         viscosity: &Viscosity,
-        x: V,
-        u: V,
+        a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
+        near: Nearby<'_, V>,
     ) -> V {
-        let mut a = V::ZERO;
-        grid.for_each_sparse_neighbour(x, &elements.centre, kernel.support, |s, r_is, r| {
-            a += viscosity.wall_shear(
-                u,
-                elements.velocity[s],
-                r_is,
-                elements.normal[s],
-                kernel.value(r) * elements.area[s],
-            );
-        });
-        a
+        let mut acceleration = V::ZERO;
+        near.for_each(
+            a.index,
+            a.x,
+            &elements.centre,
+            kernel.support,
+            |s, r_is, r| {
+                acceleration += viscosity.wall_shear(
+                    a.u,
+                    elements.velocity[s],
+                    r_is,
+                    elements.normal[s],
+                    kernel.value(r) * elements.area[s],
+                );
+            },
+        );
+        acceleration
     }
 
-    /// Wall sums for the fluid particle `a`.
+    /// Wall sums for the fluid particle `a`; `near` finds the elements near it (queried by
+    /// the particle's index).
     fn particle_terms(
         &self,
         kernel: &Wendland,
         a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
+        near: Nearby<'_, V>,
     ) -> WallTerms<V>;
 }
 

@@ -13,7 +13,7 @@ pub use super::shepard::ShepardKind;
 use super::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::Nearby;
 use crate::particles::FluidState;
 use rayon::prelude::*;
 
@@ -36,6 +36,18 @@ pub enum BoundaryQuadrature {
     Gauss,
 }
 
+impl BoundaryQuadrature {
+    /// The farthest an element's centre can lie from a particle whose kernel support of
+    /// radius `support` reaches the element: the support itself for the centre rule, plus the
+    /// largest distance `max_reach` from a centre to a corner where the whole element counts.
+    pub fn reach(self, support: f64, max_reach: f64) -> f64 {
+        match self {
+            BoundaryQuadrature::Centre => support,
+            BoundaryQuadrature::Exact | BoundaryQuadrature::Gauss => support + max_reach,
+        }
+    }
+}
+
 /// Shepard-renormalised boundary integrals with fluid-extrapolated wall pressure.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ShepardWalls<V> {
@@ -55,7 +67,7 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         kernel: &Wendland,
         elements: &mut BoundaryElements<V>,
         fluid: &FluidState<V>,
-        fluid_grid: &CellGrid<V>,
+        fluid_near: Nearby<'_, V>,
     ) {
         let (centres, in_reach) = (&elements.centre, &elements.in_reach);
         let g = self.gravity;
@@ -68,7 +80,8 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
                     return;
                 }
                 let (mut weighted, mut shepard) = (0.0, 0.0);
-                fluid_grid.for_each_neighbour(
+                fluid_near.for_each(
+                    k,
                     centres[k],
                     fluid.position,
                     kernel.support,
@@ -101,18 +114,13 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         kernel: &Wendland,
         a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
+        near: Nearby<'_, V>,
     ) -> WallTerms<V> {
         let (x, u, p) = (a.x, a.u, a.p);
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
-        let radius = match self.quadrature {
-            BoundaryQuadrature::Centre => kernel.support,
-            BoundaryQuadrature::Exact | BoundaryQuadrature::Gauss => {
-                kernel.support + elements.max_reach
-            }
-        };
-        grid.for_each_sparse_neighbour(x, &elements.centre, radius, |k, _, r| {
+        let radius = self.quadrature.reach(kernel.support, elements.max_reach);
+        near.for_each(a.index, x, &elements.centre, radius, |k, _, r| {
             let ws = match self.quadrature {
                 BoundaryQuadrature::Centre => kernel.value(r) * elements.area[k],
                 BoundaryQuadrature::Exact => crate::bi::kernel_integral(

@@ -4,7 +4,7 @@
 use super::model::{UsawWalls, Vertices};
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::CellGrid;
+use crate::neighbours::{CellGrid, Nearby};
 use crate::walls::geometric_shepard;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 use rayon::prelude::*;
@@ -52,7 +52,7 @@ fn pressure_sum<V: Vector>(
         rho: rho_a,
     };
     sum + walls
-        .particle_terms(kernel, &view, elements, element_grid)
+        .particle_terms(kernel, &view, elements, Nearby::grid(element_grid))
         .pressure_gradient
 }
 

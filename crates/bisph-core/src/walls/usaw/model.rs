@@ -5,7 +5,7 @@ use crate::bi::segment::segment_kernel_integral;
 use crate::dim::{xy, Vector};
 use crate::eos::Eos;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, Periodicity};
+use crate::neighbours::{CellGrid, Nearby, Periodicity};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel, WallTerms};
 use rayon::prelude::*;
@@ -289,7 +289,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         _kernel: &Wendland,
         elements: &mut BoundaryElements<V>,
         _fluid: &FluidState<V>,
-        _fluid_grid: &CellGrid<V>,
+        _fluid_near: Nearby<'_, V>,
     ) {
         for j in 0..elements.len() {
             elements.pressure[j] = self.segment_values(j).0;
@@ -306,7 +306,7 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
         kernel: &Wendland,
         a: &ParticleView<V>,
         elements: &BoundaryElements<V>,
-        grid: &CellGrid<V>,
+        near: Nearby<'_, V>,
     ) -> WallTerms<V> {
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
@@ -335,16 +335,17 @@ impl<V: Vector> WallModel<V> for UsawWalls<'_, V> {
             });
         // Segments (at the image next to the particle on periodic axes).
         let radius = kernel.support + elements.max_reach;
-        grid.for_each_candidate_within_shifted(a.x, radius, |j, image| {
-            let gg = segment_grad_gamma(kernel, a.x - image, elements, j);
-            if gg == V::ZERO {
-                return;
-            }
-            let (p_s, rho_s) = self.segment_values(j);
-            let ratio = self.ratio(a.rho, rho_s);
-            pressure_gradient -= gg * (ratio * wall_p(p_s) + p_a / ratio);
-            velocity_divergence -= (elements.velocity[j] - a.u).dot(gg) / ratio;
-        });
+        near.grid
+            .for_each_candidate_within_shifted(a.x, radius, |j, image| {
+                let gg = segment_grad_gamma(kernel, a.x - image, elements, j);
+                if gg == V::ZERO {
+                    return;
+                }
+                let (p_s, rho_s) = self.segment_values(j);
+                let ratio = self.ratio(a.rho, rho_s);
+                pressure_gradient -= gg * (ratio * wall_p(p_s) + p_a / ratio);
+                velocity_divergence -= (elements.velocity[j] - a.u).dot(gg) / ratio;
+            });
         WallTerms {
             pressure_gradient,
             velocity_divergence,

@@ -1,0 +1,250 @@
+//! A Verlet list between two point sets (the fluid particles and the wall elements): for
+//! each query point, the points a cell-grid search found within a listing radius at the
+//! build, filtered again at the current positions by each search.
+//!
+//! The listing radius is the largest search radius (the reach) plus a skin. While no query
+//! and no point has moved more than half the skin since the build, every point within the
+//! reach of a query is among its candidates, so a search of the rows finds the same points
+//! as a search of the grid. The candidates keep the grid search's order; without periodic
+//! axes and with the grid unchanged, both searches visit the same points in the same order
+//! with the same `r_ij`, so sums over them have the same bits.
+
+use super::grid::{CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use crate::dim::Vector;
+use rayon::prelude::*;
+
+/// For each query, the points within `reach + skin` of it at the build, in the order of the
+/// cell-grid search (see the module documentation); 4 bytes per candidate. The buffers are
+/// kept between rebuilds.
+#[derive(Clone, Debug, Default)]
+pub struct CandidateRows<V> {
+    blocks: Vec<RowBlock>,
+    queries: usize,
+    /// The largest search radius the rows answer for.
+    reach: f64,
+    period: Periodicity<V>,
+}
+
+/// The rows of [`CandidateRows::BLOCK`] consecutive queries, filled by one task.
+#[derive(Clone, Debug, Default)]
+struct RowBlock {
+    /// Query `k`'s candidates are `index[start[k]..start[k + 1]]`.
+    start: Vec<u32>,
+    index: Vec<u32>,
+}
+
+impl<V: Vector> CandidateRows<V> {
+    /// Queries per block.
+    const BLOCK: usize = 256;
+
+    /// Lists, for every point of `queries`, the points of `grid` (which indexes `points`)
+    /// within `reach + skin` of it, in parallel over blocks of queries (the rows do not
+    /// depend on the number of threads). Searches may then ask for any radius up to `reach`.
+    pub fn rebuild(
+        &mut self,
+        grid: &CellGrid<V>,
+        queries: &[V],
+        points: &[V],
+        reach: f64,
+        skin: f64,
+    ) {
+        self.queries = queries.len();
+        self.reach = reach;
+        self.period = *grid.periodicity();
+        let radius = reach + skin;
+        self.blocks
+            .resize_with(queries.len().div_ceil(Self::BLOCK), Default::default);
+        self.blocks
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(b, block)| {
+                block.start.clear();
+                block.index.clear();
+                block.start.push(0);
+                let end = ((b + 1) * Self::BLOCK).min(queries.len());
+                for &x in &queries[b * Self::BLOCK..end] {
+                    grid.for_each_sparse_neighbour(x, points, radius, |j, _, _| {
+                        block.index.push(j as u32)
+                    });
+                    block.start.push(block.index.len() as u32);
+                }
+            });
+    }
+
+    /// Number of queries listed.
+    pub fn len(&self) -> usize {
+        self.queries
+    }
+
+    /// `true` when no query is listed.
+    pub fn is_empty(&self) -> bool {
+        self.queries == 0
+    }
+
+    /// Bytes held by the buffers (their capacities).
+    pub fn memory_bytes(&self) -> usize {
+        self.blocks
+            .iter()
+            .map(|b| 4 * (b.start.capacity() + b.index.capacity()))
+            .sum()
+    }
+
+    /// Calls `visit(j, r_ij, |r_ij|)` for the candidates `j` of query `i` within `radius` of
+    /// `x` (the query's current position), with `r_ij = points[j] - x` (the minimum image
+    /// across periodic axes), in the order of the grid search at the build.
+    ///
+    /// # Panics
+    /// When `i` is not a listed query, or (in debug builds) when `radius` exceeds the reach
+    /// the rows were built for.
+    #[inline(always)]
+    pub fn for_each_within(
+        &self,
+        i: usize,
+        x: V,
+        points: &[V],
+        radius: f64,
+        mut visit: impl FnMut(usize, V, f64),
+    ) {
+        debug_assert!(radius <= self.reach, "a search beyond the listed reach");
+        let block = &self.blocks[i / Self::BLOCK];
+        let k = i % Self::BLOCK;
+        let candidates = &block.index[block.start[k] as usize..block.start[k + 1] as usize];
+        let r2max = radius * radius;
+        let periodic = self.period.any();
+        let mut kept = KeptBlock::<V>::new();
+        for chunk in candidates.chunks(KEPT_BLOCK) {
+            let offsets = chunk.iter().map(|&j| {
+                let d = points[j as usize] - x;
+                (
+                    j,
+                    if periodic {
+                        self.period.minimum_image(d)
+                    } else {
+                        d
+                    },
+                )
+            });
+            let n = kept.filter(offsets, r2max);
+            for ((&j, &r_ij), &r2) in kept.index[..n]
+                .iter()
+                .zip(&kept.offset[..n])
+                .zip(&kept.r2[..n])
+            {
+                visit(j as usize, r_ij, r2.sqrt());
+            }
+        }
+    }
+}
+
+/// Where a search finds the points near a query: the cell grid over the points, or the
+/// query's candidates in a [`CandidateRows`] that holds for the current positions.
+#[derive(Clone, Copy, Debug)]
+pub struct Nearby<'a, V: Vector> {
+    /// The cell grid over the points.
+    pub grid: &'a CellGrid<V>,
+    /// The candidates listed per query, when they hold.
+    pub listed: Option<&'a CandidateRows<V>>,
+}
+
+impl<'a, V: Vector> Nearby<'a, V> {
+    /// A search of `grid`.
+    pub fn grid(grid: &'a CellGrid<V>) -> Self {
+        Nearby { grid, listed: None }
+    }
+
+    /// Calls `visit(j, r_ij, |r_ij|)` for the points `j` within `radius` of `x`, the position
+    /// of query `query`, with `r_ij = points[j] - x` (the minimum image across periodic axes):
+    /// [`CellGrid::for_each_sparse_neighbour`], or [`CandidateRows::for_each_within`].
+    #[inline(always)]
+    pub fn for_each(
+        &self,
+        query: usize,
+        x: V,
+        points: &[V],
+        radius: f64,
+        visit: impl FnMut(usize, V, f64),
+    ) {
+        match self.listed {
+            Some(rows) => rows.for_each_within(query, x, points, radius, visit),
+            None => self
+                .grid
+                .for_each_sparse_neighbour(x, points, radius, visit),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::neighbours::grid::tests::{point_clouds, pseudo_random};
+
+    /// Moves each point by less than `limit` (pseudo-random directions), kept in the period.
+    fn moved<V: Vector>(points: &[V], limit: f64, seed: u64, period: &Periodicity<V>) -> Vec<V> {
+        let mut r = pseudo_random(points.len() * V::DIM, seed);
+        points
+            .iter()
+            .map(|&p| {
+                let mut d = V::ZERO;
+                for k in 0..V::DIM {
+                    d.set(k, r.next().unwrap() - 0.5);
+                }
+                // Components within 1/2, so |d| <= sqrt(3) / 2 < 0.87.
+                period.wrap(p + d * (0.999 * limit / 0.87))
+            })
+            .collect()
+    }
+
+    /// Rows built over `queries` and `points` find, after every query and point moved by
+    /// less than half the skin, exactly the points within each radius up to the reach
+    /// (against brute force, minimum image); unmoved and without periodic axes, they repeat
+    /// the grid search's order and bits.
+    fn check<V: Vector>(all: Vec<V>, reach: f64, period: Periodicity<V>) {
+        let all: Vec<V> = all.into_iter().map(|p| period.wrap(p)).collect();
+        let (queries, points) = all.split_at(all.len() / 3);
+        let skin = 0.2 * reach;
+        let mut grid = CellGrid::with_period(reach + skin, period).unwrap();
+        grid.rebuild(points);
+        let mut rows = CandidateRows::default();
+        rows.rebuild(&grid, queries, points, reach, skin);
+        assert_eq!(rows.len(), queries.len());
+        if !period.any() {
+            for (i, &x) in queries.iter().enumerate() {
+                let (mut searched, mut listed) = (Vec::new(), Vec::new());
+                grid.for_each_neighbour(x, points, reach, |j, r_ij, r| searched.push((j, r_ij, r)));
+                rows.for_each_within(i, x, points, reach, |j, r_ij, r| listed.push((j, r_ij, r)));
+                assert_eq!(listed, searched, "query {i}");
+            }
+        }
+        let half = 0.5 * skin;
+        let (queries, points) = (
+            moved(queries, half, 3, &period),
+            moved(points, half, 4, &period),
+        );
+        for radius in [0.6 * reach, reach] {
+            for (i, &x) in queries.iter().enumerate() {
+                let mut listed = Vec::new();
+                rows.for_each_within(i, x, &points, radius, |j, r_ij, r| {
+                    assert_eq!(r_ij, period.minimum_image(points[j] - x));
+                    assert_eq!(r, r_ij.length_squared().sqrt());
+                    listed.push(j);
+                });
+                let expected: Vec<usize> = (0..points.len())
+                    .filter(|&j| {
+                        period.minimum_image(points[j] - x).length_squared() < radius * radius
+                    })
+                    .collect();
+                listed.sort_unstable();
+                assert_eq!(listed, expected, "query {i}, radius {radius}");
+            }
+        }
+    }
+
+    #[test]
+    fn rows_find_every_point_within_the_reach_after_moves_within_half_the_skin() {
+        let (p2, period2, p3, period3) = point_clouds(7);
+        check(p2.clone(), 0.06, Periodicity::none());
+        check(p2, 0.06, period2);
+        check(p3.clone(), 0.12, Periodicity::none());
+        check(p3, 0.12, period3);
+    }
+}
