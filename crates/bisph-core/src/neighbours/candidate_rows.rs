@@ -37,9 +37,10 @@ impl<V: Vector> CandidateRows<V> {
     /// Queries per block.
     const BLOCK: usize = 256;
 
-    /// Lists, for every point of `queries`, the points of `grid` (which indexes `points`)
-    /// within `reach + skin` of it, in parallel over blocks of queries (the rows do not
-    /// depend on the number of threads). Searches may then ask for any radius up to `reach`.
+    /// Lists, for every point of `queries`, the points of `grid` (which indexes `points`, in
+    /// cells at least `reach + skin` wide) within `reach + skin` of it, in parallel over
+    /// blocks of queries (the rows do not depend on the number of threads). Searches may then
+    /// ask for any radius up to `reach`.
     pub fn rebuild(
         &mut self,
         grid: &CellGrid<V>,
@@ -52,6 +53,10 @@ impl<V: Vector> CandidateRows<V> {
         self.reach = reach;
         self.period = *grid.periodicity();
         let radius = reach + skin;
+        debug_assert!(
+            radius <= grid.cell_size(),
+            "a listing radius wider than a cell"
+        );
         self.blocks
             .resize_with(queries.len().div_ceil(Self::BLOCK), Default::default);
         self.blocks

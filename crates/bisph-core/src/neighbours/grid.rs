@@ -570,7 +570,8 @@ impl<V: Vector> CellGrid<V> {
     }
 
     /// Calls `visit(j, r_ij, |r_ij|)` with `r_ij = points[j] - x` (the minimum image across
-    /// periodic axes) for every point with `|r_ij| < radius`, in storage order
+    /// periodic axes) for every point with `|r_ij| < radius` (at most one cell), in storage
+    /// order
     /// ([`CellGrid::for_each_neighbour_run`], one at a time).
     #[inline(always)]
     pub fn for_each_neighbour(
@@ -584,8 +585,8 @@ impl<V: Vector> CellGrid<V> {
         self.for_each_neighbour_run(x, points, radius, &mut kept, one_at_a_time(visit));
     }
 
-    /// Calls `visit(index, r_ij, r2)` with runs of the points within `radius` of `x`, in
-    /// storage order: `index[k]` is a point `j`, `r_ij[k] = points[j] - x` (the minimum image
+    /// Calls `visit(index, r_ij, r2)` with runs of the points within `radius` (at most one
+    /// cell) of `x`, in storage order: `index[k]` is a point `j`, `r_ij[k] = points[j] - x` (the minimum image
     /// across periodic axes) and `r2[k] = |r_ij[k]|^2`.
     ///
     /// The candidates of each run of cells are filtered in blocks without a branch per

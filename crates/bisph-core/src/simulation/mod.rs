@@ -334,7 +334,9 @@ impl<V: Vector> Simulation<V> {
             .expect("periods must hold three kernel supports (checked by the caller)");
         sim.fluid_grid = fluid_grid.unwrap_or_else(|| grid.clone());
         sim.scratch.skin = skin;
-        sim.walls.grid = grid;
+        // One cell around a particle holds every element its wall terms reach, and every
+        // element the Verlet list lists for it (that reach plus the skin).
+        sim.walls.grid = CellGrid::with_period(sim.wall_reach() + skin, period).unwrap_or(grid);
         sim.walls.periodicity = period;
         sim.walls.wrap_elements();
         sim.wrap_positions();
@@ -787,18 +789,15 @@ impl<V: Vector> Simulation<V> {
     /// grids. Only for the boundary-integral walls, and only where the walls are fixed (the
     /// list's check follows the particles alone).
     fn list_wall_candidates(&mut self, origin: Option<&[V]>) {
-        let reach = match self.config.wall_model {
-            WallModelChoice::Energy => self.config.kernel.support,
-            WallModelChoice::ShepardBi(_, quadrature) => {
-                quadrature.reach(self.config.kernel.support, self.walls.elements.max_reach)
-            }
-            WallModelChoice::Usaw(_) => 0.0,
-        };
+        let reach = self.wall_reach();
         let owned = self.owned_len();
         let s = &mut self.scratch;
         s.wall_rows_valid = false;
         let walls = &self.walls;
-        if reach == 0.0 || walls.elements.is_empty() || walls.has_moving_bodies() {
+        if self.config.wall_model.has_vertex_particles()
+            || walls.elements.is_empty()
+            || walls.has_moving_bodies()
+        {
             return;
         }
         let position = origin.unwrap_or(&self.fluid.position);
@@ -809,6 +808,19 @@ impl<V: Vector> Simulation<V> {
         s.element_particle_rows
             .rebuild(&self.fluid_grid, centres, position, support, s.skin);
         s.wall_rows_valid = true;
+    }
+
+    /// The farthest an element's centre can lie from a particle and count in its wall terms:
+    /// the support, plus the largest element reach where the `bi` walls integrate whole
+    /// elements.
+    fn wall_reach(&self) -> f64 {
+        let support = self.config.kernel.support;
+        match self.config.wall_model {
+            WallModelChoice::ShepardBi(_, quadrature) => {
+                quadrature.reach(support, self.walls.elements.max_reach)
+            }
+            WallModelChoice::Energy | WallModelChoice::Usaw(_) => support,
+        }
     }
 
     /// Lower bounds of the particles' distances to the walls: with fixed walls and a Verlet
