@@ -794,9 +794,11 @@ impl<V: Vector> Simulation<V> {
         let s = &mut self.scratch;
         s.wall_rows_valid = false;
         let walls = &self.walls;
+        // A period too short for three cells of that width keeps cells of one support.
         if self.config.wall_model.has_vertex_particles()
             || walls.elements.is_empty()
             || walls.has_moving_bodies()
+            || walls.grid.cell_size() < reach + s.skin
         {
             return;
         }
