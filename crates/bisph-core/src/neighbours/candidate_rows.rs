@@ -9,7 +9,7 @@
 //! axes and with the grid unchanged, both searches visit the same points in the same order
 //! with the same `r_ij`, so sums over them have the same bits.
 
-use super::grid::{CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use super::grid::{one_at_a_time, CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
 use crate::dim::Vector;
 use rayon::prelude::*;
 
@@ -108,7 +108,7 @@ impl<V: Vector> CandidateRows<V> {
         x: V,
         points: &[V],
         radius: f64,
-        mut visit: impl FnMut(usize, V, f64),
+        visit: impl FnMut(usize, V, f64),
     ) {
         debug_assert!(radius <= self.reach, "a search beyond the listed reach");
         let block = &self.blocks[i / Self::BLOCK];
@@ -117,6 +117,7 @@ impl<V: Vector> CandidateRows<V> {
         let r2max = radius * radius;
         let periodic = self.period.any();
         let mut kept = KeptBlock::<V>::new();
+        let mut visit = one_at_a_time(visit);
         for chunk in candidates.chunks(KEPT_BLOCK) {
             let offsets = chunk.iter().map(|&j| {
                 let d = points[j as usize] - x;
@@ -130,13 +131,7 @@ impl<V: Vector> CandidateRows<V> {
                 )
             });
             let n = kept.filter(offsets, r2max);
-            for ((&j, &r_ij), &r2) in kept.index[..n]
-                .iter()
-                .zip(&kept.offset[..n])
-                .zip(&kept.r2[..n])
-            {
-                visit(j as usize, r_ij, r2.sqrt());
-            }
+            visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
         }
     }
 }

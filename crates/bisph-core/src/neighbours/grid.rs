@@ -636,7 +636,7 @@ impl<V: Vector> CellGrid<V> {
 /// The run visitor of the `for_each_neighbour_run` searches that calls `visit(j, r_ij,
 /// |r_ij|)` for each neighbour of the run in turn.
 #[inline(always)]
-fn one_at_a_time<V: Copy>(
+pub(super) fn one_at_a_time<V: Copy>(
     mut visit: impl FnMut(usize, V, f64),
 ) -> impl FnMut(&[u32], &[V], &[f64]) {
     move |index, offset, r2| {
