@@ -1,24 +1,26 @@
 //! SPHERIC test 2 (Kleefsman et al. 2005; paper 2, 3.2): 3-D dam break against a box,
-//! pressures P1-P4 and heights H2, H4 against the MARIN experiment.
+//! pressures P1-P4 on the box's front face and heights H1-H4 against the MARIN experiment.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
 use crate::support::{column, line, load, plot, read_columns, run};
 use std::path::Path;
 
-/// The experiment file in the data folder: time, P1, H2 and H4 of the MARIN experiment
-/// (`data/README.md`).
-pub const DATA_FILE: &str = "spheric-test2/kleefsman2005-p1-h2-h4.dat";
+/// The experiment file in the data folder: time, P1-P4 and H1-H4 of the MARIN experiment,
+/// the heights labelled by the probes' positions (`data/README.md`).
+pub const DATA_FILE: &str = "spheric-test2/kleefsman2005-p1-p4-h1-h4.dat";
+
+/// The gauges compared, as named in the case file and in the experiment file's header.
+const PRESSURES: [&str; 4] = ["P1", "P2", "P3", "P4"];
+const HEIGHTS: [&str; 4] = ["H1", "H2", "H3", "H4"];
 
 /// The experiment series the case compares with.
 pub struct Experiment {
     /// Time [s].
     pub t: Vec<f64>,
-    /// Pressure P1 [Pa].
-    pub p1: Vec<f64>,
-    /// Water height H2 (x = 0.992 m) [m].
-    pub h2: Vec<f64>,
-    /// Water height H4 (x = 2.638 m) [m].
-    pub h4: Vec<f64>,
+    /// Pressures P1-P4 [Pa].
+    pub pressure: [Vec<f64>; 4],
+    /// Water heights H1-H4 (x = 0.496, 0.992, 1.488, 2.638 m) [m].
+    pub height: [Vec<f64>; 4],
 }
 
 /// Reads the experiment file found in the data folder.
@@ -30,9 +32,7 @@ pub fn experiment() -> Result<Experiment, String> {
 }
 
 /// Parses whitespace-separated columns under a header of names with units in brackets
-/// (`Time (s) P1 (Pa) ... H2 (m) ... H4 (m)`), so that the official file with all its columns
-/// reads as well. Only H2 and H4 are taken of the heights: they are the same in every copy of
-/// the file (the official file's H1 and H3 columns are swapped).
+/// (`Time (s) P1 (Pa) ... H4 (m)`), taking the columns by their names.
 fn parse_experiment(text: &str) -> Result<Experiment, String> {
     let mut lines = text.lines();
     let names: Vec<&str> = lines
@@ -47,8 +47,15 @@ fn parse_experiment(text: &str) -> Result<Experiment, String> {
             .position(|n| *n == name)
             .ok_or_else(|| format!("line 1: no column `{name}` in the header"))
     };
-    let columns = [index("Time")?, index("P1")?, index("H2")?, index("H4")?];
-    let mut series: [Vec<f64>; 4] = Default::default();
+    let wanted: Vec<&str> = std::iter::once("Time")
+        .chain(PRESSURES)
+        .chain(HEIGHTS)
+        .collect();
+    let columns = wanted
+        .iter()
+        .map(|name| index(name))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut series: Vec<Vec<f64>> = vec![Vec::new(); columns.len()];
     for (k, line) in lines.enumerate() {
         if line.trim().is_empty() {
             continue;
@@ -73,8 +80,16 @@ fn parse_experiment(text: &str) -> Result<Experiment, String> {
     if series[0].is_empty() {
         return Err("no data rows".into());
     }
-    let [t, p1, h2, h4] = series;
-    Ok(Experiment { t, p1, h2, h4 })
+    let mut series = series.into_iter();
+    let t = series.next().unwrap_or_default();
+    let mut next4 = || std::array::from_fn(|_| series.next().unwrap_or_default());
+    let pressure = next4();
+    let height = next4();
+    Ok(Experiment {
+        t,
+        pressure,
+        height,
+    })
 }
 
 /// First time `p` rises above `threshold` (linear interpolation), NaN if never.
@@ -128,7 +143,7 @@ impl ValidationCase for SphericTest2 {
         "spheric-test2"
     }
     fn description(&self) -> &'static str {
-        "paper 2, 3.2: SPHERIC test 2 3-D dam break on a box; front arrival at P1, P1 first peak, heights H2 and H4 against the MARIN experiment"
+        "paper 2, 3.2: SPHERIC test 2 3-D dam break on a box; front arrival at P1, first-impact peaks P1-P4, heights H1-H4 against the MARIN experiment"
     }
     fn check_data(&self) -> Result<(), String> {
         experiment().map(|_| ())
@@ -157,107 +172,123 @@ impl ValidationCase for SphericTest2 {
         let end = s.time;
         let (h, rows) = read_columns(&out.join("probes.csv"))?;
         let t = column(&h, &rows, "t")?;
-        let p1 = column(&h, &rows, "P1")?;
-        let h2 = column(&h, &rows, "H2")?;
-        let h4 = column(&h, &rows, "H4")?;
-        let Experiment {
-            t: te,
-            p1: ep1,
-            h2: eh2,
-            h4: eh4,
-        } = experiment()?;
-        let arrival_sim = arrival(&t, &p1, ARRIVAL_PA);
-        let arrival_exp = arrival(&te, &ep1, ARRIVAL_PA);
-        // First impact: the largest P1 within FIRST_IMPACT_S of the front's arrival.
-        let window = |tt: &[f64], y: &[f64], from: f64| {
+        let gauges = |names: [&str; 4]| -> Result<Vec<Vec<f64>>, String> {
+            names.iter().map(|name| column(&h, &rows, name)).collect()
+        };
+        let (pressure, height) = (gauges(PRESSURES)?, gauges(HEIGHTS)?);
+        let exp = experiment()?;
+        let arrival_sim = arrival(&t, &pressure[0], ARRIVAL_PA);
+        let arrival_exp = arrival(&exp.t, &exp.pressure[0], ARRIVAL_PA);
+        // First impact: the largest pressure within FIRST_IMPACT_S of the sensor's own arrival.
+        let first_peak = |tt: &[f64], y: &[f64]| {
+            let from = arrival(tt, y, ARRIVAL_PA);
             tt.iter()
                 .zip(y)
                 .filter(|(&t, _)| t >= from && t <= from + FIRST_IMPACT_S)
                 .fold(0.0f64, |a, (_, &v)| a.max(v))
         };
-        let peak_sim = window(&t, &p1, arrival_sim);
-        let peak_exp = window(&te, &ep1, arrival_exp);
-        let rms_h2 = rms(&t, &h2, &te, &eh2, end);
-        let rms_h4 = rms(&t, &h4, &te, &eh4, end);
-        let clip = |tt: &[f64], y: &[f64]| -> (Vec<f64>, Vec<f64>) {
-            tt.iter()
-                .zip(y)
-                .filter(|(&t, _)| t <= end)
-                .map(|(&t, &y)| (t, y))
-                .unzip()
-        };
-        let (te1, ep1c) = clip(&te, &ep1);
-        let (te2, eh2c) = clip(&te, &eh2);
-        let (te4, eh4c) = clip(&te, &eh4);
-        let plots = vec![
-            plot(
-                out,
-                "spheric2_p1.png",
-                "SPHERIC test 2: pressure P1",
-                "t [s]",
-                "p [Pa]",
-                vec![
-                    line("bisph", t.clone(), p1.clone()),
-                    line("experiment", te1, ep1c),
-                ],
-            )?,
-            plot(
-                out,
-                "spheric2_heights.png",
-                "SPHERIC test 2: heights H2 and H4",
-                "t [s]",
-                "height [m]",
-                vec![
-                    line("H2 bisph", t.clone(), h2.clone()),
-                    line("H2 experiment", te2, eh2c),
-                    line("H4 bisph", t.clone(), h4.clone()),
-                    line("H4 experiment", te4, eh4c),
-                ],
-            )?,
-        ];
-        let mut checks = vec![
-            Check::new(
-                "front arrival at P1 [s]",
-                arrival_sim,
-                arrival_exp,
-                Tolerance::Absolute(0.05),
-                "MARIN experiment (first P1 > 1 kPa); within 0.05 s",
-            ),
-            Check::new(
-                "RMS(H2 - experiment) [m]",
-                rms_h2,
+        let peak_sim: Vec<f64> = pressure.iter().map(|p| first_peak(&t, p)).collect();
+        let peak_exp: Vec<f64> = (exp.pressure.iter())
+            .map(|p| first_peak(&exp.t, p))
+            .collect();
+        let rms_height: Vec<f64> = (height.iter().zip(&exp.height))
+            .map(|(h, e)| rms(&t, h, &exp.t, e, end))
+            .collect();
+        let plots = gauge_plots(out, &t, (&pressure, &height), &exp, end)?;
+        let mut checks = vec![Check::new(
+            "front arrival at P1 [s]",
+            arrival_sim,
+            arrival_exp,
+            Tolerance::Absolute(0.05),
+            "MARIN experiment (first P1 > 1 kPa); within 0.05 s",
+        )];
+        for (k, (name, x)) in HEIGHTS.iter().zip(PROBE_X).enumerate() {
+            checks.push(Check::new(
+                &format!("RMS({name} - experiment) [m]"),
+                rms_height[k],
                 0.05,
                 Tolerance::AtMost,
-                "MARIN experiment, H2 (x = 0.992), over the run",
-            ),
-            Check::new(
-                "RMS(H4 - experiment) [m]",
-                rms_h4,
-                0.05,
-                Tolerance::AtMost,
-                "MARIN experiment, H4 (x = 2.638), over the run",
-            ),
-        ];
+                &format!("MARIN experiment, {name} (x = {x}), over the run"),
+            ));
+        }
         if !quick {
             checks.push(Check::new(
                 "P1 first-impact peak [Pa]",
-                peak_sim,
-                peak_exp,
+                peak_sim[0],
+                peak_exp[0],
                 Tolerance::Relative(0.3),
                 "MARIN experiment; within 30% at dx = 0.55/45",
             ));
         }
+        let peaks: Vec<String> = (PRESSURES.iter().zip(peak_sim.iter().zip(&peak_exp)))
+            .map(|(name, (sim, exp))| format!("{name} {sim:.0} Pa (experiment {exp:.0})"))
+            .collect();
+        let heights: Vec<String> = (HEIGHTS.iter().zip(&rms_height))
+            .map(|(name, r)| format!("{name} {r:.4} m"))
+            .collect();
         Ok(CaseReport {
             name: self.name().into(),
             checks,
             plots,
             notes: vec![format!(
-                "arrival at P1 {arrival_sim:.4} s (experiment {arrival_exp:.4} s); P1 first-impact peak (within 0.06 s of the arrival) {peak_sim:.0} Pa (experiment {peak_exp:.0} Pa); RMS H2 {rms_h2:.4} m, H4 {rms_h4:.4} m over [0, {end:.2}] s; {} particles, {} boundary elements, {} steps, {:.3e} particle-steps/s.",
+                "arrival at P1 {arrival_sim:.4} s (experiment {arrival_exp:.4} s); first-impact peaks (within 0.06 s of each sensor's first 1 kPa) {}; RMS of the heights {} over [0, {end:.2}] s; {} particles, {} boundary elements, {} steps, {:.3e} particle-steps/s.",
+                peaks.join(", "),
+                heights.join(", "),
                 s.fluid_particles, s.boundary_elements, s.steps, s.particle_steps_per_second
             )],
             wall_seconds: 0.0,
         })
     }
+}
+
+/// Positions `x` of the height probes H1-H4 [m].
+const PROBE_X: [f64; 4] = [0.496, 0.992, 1.488, 2.638];
+
+/// Plots of the pressures (P1 and P2, P3 and P4) and heights (H1 and H2, H3 and H4) of the
+/// run (`t`, `(pressure, height)`) against the experiment over `[0, end]`.
+fn gauge_plots(
+    out: &Path,
+    t: &[f64],
+    (pressure, height): (&[Vec<f64>], &[Vec<f64>]),
+    exp: &Experiment,
+    end: f64,
+) -> Result<Vec<std::path::PathBuf>, String> {
+    let clip = |y: &[f64]| -> (Vec<f64>, Vec<f64>) {
+        (exp.t.iter())
+            .zip(y)
+            .filter(|(&t, _)| t <= end)
+            .map(|(&t, &y)| (t, y))
+            .unzip()
+    };
+    let mut plots = Vec::new();
+    let groups = [
+        ("pressures", "p [Pa]", &PRESSURES, pressure, &exp.pressure),
+        ("heights", "height [m]", &HEIGHTS, height, &exp.height),
+    ];
+    for (kind, unit, names, sim, measured) in groups {
+        for pair in [0, 2] {
+            let mut series = Vec::new();
+            for k in pair..pair + 2 {
+                let (te, ye) = clip(&measured[k]);
+                series.push(line(
+                    &format!("{} bisph", names[k]),
+                    t.to_vec(),
+                    sim[k].clone(),
+                ));
+                series.push(line(&format!("{} experiment", names[k]), te, ye));
+            }
+            let (a, b) = (names[pair], names[pair + 1]);
+            plots.push(plot(
+                out,
+                &format!("spheric2_{}_{}.png", a.to_lowercase(), b.to_lowercase()),
+                &format!("SPHERIC test 2: {kind} {a} and {b}"),
+                "t [s]",
+                unit,
+                series,
+            )?);
+        }
+    }
+    Ok(plots)
 }
 
 /// The SPHERIC test 2 case.
@@ -270,6 +301,33 @@ mod tests {
     #[test]
     fn the_source_tree_holds_the_experiment_data() {
         let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data");
-        crate::data::find_in(&[source], super::DATA_FILE).unwrap();
+        let path = crate::data::find_in(&[source], super::DATA_FILE).unwrap();
+        let text = std::fs::read_to_string(path).unwrap();
+        let exp = super::parse_experiment(&text).unwrap();
+        assert_eq!(exp.t.len(), 7395);
+        // The water reaches the probes in the order of their distance from the reservoir
+        // (H4 stands in it): H3, then H2, then H1 behind the box.
+        let rise = |h: &[f64]| exp.t[h.iter().position(|&h| h > 0.02).unwrap()];
+        let [h1, h2, h3] = [0, 1, 2].map(|k| rise(&exp.height[k]));
+        assert!(
+            h3 < h2 && h2 < h1,
+            "rise at H1 {h1} s, H2 {h2} s, H3 {h3} s"
+        );
+        assert!(exp.height[3][0] > 0.5, "H4 in the reservoir");
+        // P1, the lowest sensor, is reached first.
+        let first = |p: &[f64]| super::arrival(&exp.t, p, super::ARRIVAL_PA);
+        let arrivals: Vec<f64> = exp.pressure.iter().map(|p| first(p)).collect();
+        assert!(
+            arrivals[1..].iter().all(|&a| a > arrivals[0]),
+            "{arrivals:?}"
+        );
+    }
+
+    #[test]
+    fn a_missing_column_is_named() {
+        let text =
+            "Time (s) P1 (Pa) P2 (Pa) P3 (Pa) H1 (m) H2 (m) H3 (m) H4 (m)\n0 1 2 3 4 5 6 7\n";
+        let e = super::parse_experiment(text).err().unwrap();
+        assert!(e.contains("`P4`"), "{e}");
     }
 }

@@ -40,7 +40,7 @@ fn missing_data_is_named_before_any_simulation() {
     let run = validate_with_data(&empty, "spheric-test2", &out);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "{stderr}");
-    let tried = empty.join("spheric-test2/kleefsman2005-p1-h2-h4.dat");
+    let tried = empty.join("spheric-test2/kleefsman2005-p1-p4-h1-h4.dat");
     assert!(stderr.contains("spheric-test2"), "{stderr}");
     assert!(stderr.contains(&tried.display().to_string()), "{stderr}");
     assert!(stderr.contains("BISPH_DATA"), "{stderr}");
@@ -56,7 +56,7 @@ fn damaged_data_is_named_with_its_line() {
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data"),
         &data,
     );
-    let file = data.join("spheric-test2/kleefsman2005-p1-h2-h4.dat");
+    let file = data.join("spheric-test2/kleefsman2005-p1-p4-h1-h4.dat");
     let text = std::fs::read_to_string(&file).unwrap();
     std::fs::write(&file, text.replacen("0.0010289056", "0.00l0289056", 1)).unwrap();
     let run = validate_with_data(&data, "spheric-test2", &dir.join("out"));
