@@ -80,15 +80,14 @@ fn parse_experiment(text: &str) -> Result<Experiment, String> {
     if series[0].is_empty() {
         return Err("no data rows".into());
     }
-    let mut series = series.into_iter();
-    let t = series.next().unwrap_or_default();
-    let mut next4 = || std::array::from_fn(|_| series.next().unwrap_or_default());
-    let pressure = next4();
-    let height = next4();
+    // One series per wanted column, in the order of `wanted`.
+    let [t, p1, p2, p3, p4, h1, h2, h3, h4]: [Vec<f64>; 9] = series
+        .try_into()
+        .map_err(|_| "the time, four pressures and four heights".to_string())?;
     Ok(Experiment {
         t,
-        pressure,
-        height,
+        pressure: [p1, p2, p3, p4],
+        height: [h1, h2, h3, h4],
     })
 }
 
