@@ -55,6 +55,22 @@ impl Wendland {
         self.alpha * a2 * a2 * (2.0 * q + 1.0)
     }
 
+    /// [`Wendland::value`] computed without a branch (the polynomial, then zero selected
+    /// beyond the support): the same bits for every finite `r`, and a form that a loop over
+    /// several distances evaluates in vector lanes.
+    #[inline(always)]
+    pub fn value_or_zero(&self, r: f64) -> f64 {
+        let q = r * self.inv_h;
+        let a = 1.0 - 0.5 * q;
+        let a2 = a * a;
+        let w = self.alpha * a2 * a2 * (2.0 * q + 1.0);
+        if q < 2.0 {
+            w
+        } else {
+            0.0
+        }
+    }
+
     /// Factor `F` with `grad W(r) = F r` (`F <= 0`, zero beyond the support).
     #[inline(always)]
     pub fn gradient_factor(&self, r: f64) -> f64 {

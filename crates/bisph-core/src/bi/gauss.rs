@@ -64,19 +64,66 @@ fn triangle_rule(t: [DVec3; 3], out: &mut Vec<(DVec3, f64)>) {
     out.push((point(t[2], t[0], t[1]), weight));
 }
 
-/// `sum_k w_k W(|y_k - x|)`: the integral by the rule with points `y_k` and weights `w_k`.
-#[inline(always)]
-pub fn integral<V: crate::dim::Vector>(
-    kernel: &Wendland,
-    x: V,
+/// Points of a rule evaluated together: an element's rule is stored in groups of this many.
+pub const LANES: usize = 4;
+
+/// [`LANES`] points of an element's rule by coordinate (`z` zero in 2-D), with their weights.
+/// The lanes past the rule's last point repeat that point with weight zero, so they add
+/// exactly zero to the integral.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PointGroup {
+    coord: [[f64; LANES]; 3],
+    weight: [f64; LANES],
+}
+
+/// Appends the rule with points `points` and weights `weights` to `out` in groups of
+/// [`LANES`] points (see [`PointGroup`]).
+pub fn group_points<V: crate::dim::Vector>(
     points: &[V],
     weights: &[f64],
-) -> f64 {
-    points
-        .iter()
-        .zip(weights)
-        .map(|(&y, &w)| w * kernel.value((y - x).length()))
-        .sum()
+    out: &mut Vec<PointGroup>,
+) {
+    for (group_points, group_weights) in points.chunks(LANES).zip(weights.chunks(LANES)) {
+        let mut group = PointGroup::default();
+        for l in 0..LANES {
+            let k = l.min(group_points.len() - 1);
+            for c in 0..V::DIM {
+                group.coord[c][l] = group_points[k].get(c);
+            }
+            group.weight[l] = if l < group_weights.len() {
+                group_weights[l]
+            } else {
+                0.0
+            };
+        }
+        out.push(group);
+    }
+}
+
+/// `sum_k w_k W(|y_k - x|)`: the integral by the rule with points `y_k` and weights `w_k`,
+/// stored in groups ([`group_points`]). The points of a group are evaluated lane by lane
+/// without a branch and summed in the rule's order: the bits of the point-by-point sum.
+#[inline(always)]
+pub fn integral<V: crate::dim::Vector>(kernel: &Wendland, x: V, groups: &[PointGroup]) -> f64 {
+    let x = [x.get(0), x.get(1), if V::DIM == 3 { x.get(2) } else { 0.0 }];
+    let mut sum = 0.0;
+    for g in groups {
+        let mut term = [0.0; LANES];
+        for (l, term) in term.iter_mut().enumerate() {
+            let d = [
+                g.coord[0][l] - x[0],
+                g.coord[1][l] - x[1],
+                g.coord[2][l] - x[2],
+            ];
+            // `|y - x|` as `Vector::length` computes it (a zero `z` adds exactly zero).
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            *term = g.weight[l] * kernel.value_or_zero(r);
+        }
+        for t in term {
+            sum += t;
+        }
+    }
+    sum
 }
 
 /// `int W dS` over the segment `a -> b` by its rule ([`segment_rule`]).

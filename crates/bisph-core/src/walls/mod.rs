@@ -64,12 +64,11 @@ pub struct BoundaryElements<V: Vector> {
     /// [`Walls::move_to`], set from outside by [`BoundaryElements::set_corners`] (which keeps
     /// the Gauss rules in step).
     pub corners: Vec<V>,
-    /// Points of each element's Gauss rule at its current place ([`crate::bi::gauss`]),
-    /// flattened: element `j` owns `gauss_points[gauss_start[j]..gauss_start[j + 1]]`.
-    gauss_points: Vec<V>,
-    /// Weights of those points.
-    gauss_weights: Vec<f64>,
-    /// Offsets into `gauss_points` (length = elements + 1).
+    /// Points and weights of each element's Gauss rule at its current place
+    /// ([`crate::bi::gauss`]), in groups, flattened: element `j` owns
+    /// `gauss_groups[gauss_start[j]..gauss_start[j + 1]]`.
+    gauss_groups: Vec<crate::bi::gauss::PointGroup>,
+    /// Offsets into `gauss_groups` (length = elements + 1).
     gauss_start: Vec<u32>,
     /// Merged wall pieces and per-cell candidate lists for the geometric Shepard factor
     /// (empty until [`Walls::prepare_gamma`]; rebuilt whenever the walls are placed).
@@ -113,20 +112,22 @@ impl<V: Vector> BoundaryElements<V> {
         if self.gauss_start.is_empty() {
             self.gauss_start.push(0);
         }
-        crate::bi::gauss_rule(corners, &mut self.gauss_points, &mut self.gauss_weights);
-        self.gauss_start.push(self.gauss_points.len() as u32);
+        self.push_gauss_rule(corners);
+    }
+
+    /// Appends the Gauss rule of an element with corners `corners`.
+    fn push_gauss_rule(&mut self, corners: &[V]) {
+        let (mut points, mut weights) = (Vec::with_capacity(8), Vec::with_capacity(8));
+        crate::bi::gauss_rule(corners, &mut points, &mut weights);
+        crate::bi::gauss::group_points(&points, &weights, &mut self.gauss_groups);
+        self.gauss_start.push(self.gauss_groups.len() as u32);
     }
 
     /// `int_{S_j} W(|y - x|) dS` over element `j` by its Gauss rule ([`crate::bi::gauss`]).
     #[inline(always)]
     pub fn gauss_integral(&self, kernel: &Wendland, x: V, j: usize) -> f64 {
         let range = self.gauss_start[j] as usize..self.gauss_start[j + 1] as usize;
-        crate::bi::gauss::integral(
-            kernel,
-            x,
-            &self.gauss_points[range.clone()],
-            &self.gauss_weights[range],
-        )
+        crate::bi::gauss::integral(kernel, x, &self.gauss_groups[range])
     }
 
     /// Sets the current corner points (the layout of `reference_corners`) and the Gauss rules
@@ -140,13 +141,16 @@ impl<V: Vector> BoundaryElements<V> {
     /// Recomputes the Gauss rules of every element from the current corners (after the
     /// corners moved).
     fn refresh_gauss_rules(&mut self) {
-        self.gauss_points.clear();
-        self.gauss_weights.clear();
+        self.gauss_groups.clear();
+        self.gauss_start.clear();
+        self.gauss_start.push(0);
+        let corners = std::mem::take(&mut self.corners);
         for j in 0..self.len() {
-            let corners =
-                &self.corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize];
-            crate::bi::gauss_rule(corners, &mut self.gauss_points, &mut self.gauss_weights);
+            self.push_gauss_rule(
+                &corners[self.corner_start[j] as usize..self.corner_start[j + 1] as usize],
+            );
         }
+        self.corners = corners;
     }
 
     /// Corner points of element `j` in the reference configuration.
