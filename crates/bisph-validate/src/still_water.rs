@@ -17,6 +17,7 @@
 //! validation, hours long, continues where a stopped invocation left it.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
+use crate::support::build_fingerprint;
 use bisph_core::{Simulation, Vector};
 use bisph_io::case::{build_simulation, parse_case, CaseDim};
 use bisph_io::formats::plot::line_plot_png as plot;
@@ -196,17 +197,6 @@ const STATE_FILE: &str = "checkpoint.bin";
 const SERIES_FILE: &str = "series.json";
 const BUILD_FILE: &str = "build.txt";
 const RESULT_FILE: &str = "result.json";
-
-/// A fingerprint of the running program (its executable's bytes), so that figures saved by
-/// one build are never mixed with another's.
-fn build_fingerprint() -> Result<String, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot locate the program: {e}"))?;
-    let bytes = std::fs::read(&exe).map_err(|e| format!("cannot read {}: {e}", exe.display()))?;
-    Ok(format!(
-        "{:016x}",
-        bisph_io::run::checkpoint::fnv1a64(&bytes)
-    ))
-}
 
 /// What a run's folder holds of an earlier invocation by this build.
 enum Saved<V: Vector> {

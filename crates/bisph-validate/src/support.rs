@@ -3,7 +3,8 @@
 
 use bisph_io::case::{parse_case, LoadedCase};
 use bisph_io::formats::plot::{write_png, Plot, Series, Style};
-use bisph_io::run::runner::{run_case, Summary};
+use bisph_io::run::runner::{resume_case, run_case, run_case_with, Summary};
+use bisph_io::run::{checkpoint, RunOptions};
 use std::path::Path;
 
 /// A case file shipped in `cases/`, embedded so `bisph validate` runs from anywhere.
@@ -15,6 +16,48 @@ pub fn load(name: &str, text: &str, overrides: &[&str]) -> Result<LoadedCase, St
 /// Runs a loaded case to its end, writing its outputs under `out`.
 pub fn run(loaded: &LoadedCase, out: &Path) -> Result<Summary, String> {
     run_case(loaded, out, &mut |_| {}).map_err(|e| e.to_string())
+}
+
+/// A fingerprint of the running program (its executable's bytes), so that what one build
+/// saved is never mixed with another's.
+pub fn build_fingerprint() -> Result<String, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot locate the program: {e}"))?;
+    let bytes = std::fs::read(&exe).map_err(|e| format!("cannot read {}: {e}", exe.display()))?;
+    Ok(format!("{:016x}", checkpoint::fnv1a64(&bytes)))
+}
+
+/// The file naming the build that writes a resumable run's folder.
+const BUILD_FILE: &str = "build.txt";
+
+/// Minutes of wall clock between two checkpoints of a resumable run.
+const CHECKPOINT_MINUTES: f64 = 10.0;
+
+/// Runs a loaded case to its end under `out`, saving a checkpoint every
+/// [`CHECKPOINT_MINUTES`]: a run stopped part-way (killed, or the machine gone) continues from
+/// its last checkpoint when the same build runs the same case into `out` again, with the
+/// figures of an uninterrupted run. Anything else in `out` is cleared first.
+pub fn run_resumable(loaded: &LoadedCase, out: &Path) -> Result<Summary, String> {
+    let build = build_fingerprint()?;
+    let same_build = std::fs::read_to_string(out.join(BUILD_FILE)).is_ok_and(|b| b == build);
+    let resume = same_build
+        && out.join(checkpoint::FILE_NAME).exists()
+        && resume_case(out).is_ok_and(|saved| saved.text == loaded.text);
+    if !resume {
+        if out.exists() {
+            std::fs::remove_dir_all(out)
+                .map_err(|e| format!("cannot clear {}: {e}", out.display()))?;
+        }
+        std::fs::create_dir_all(out)
+            .map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+        std::fs::write(out.join(BUILD_FILE), &build)
+            .map_err(|e| format!("cannot write {}: {e}", out.join(BUILD_FILE).display()))?;
+    }
+    let options = RunOptions {
+        checkpoint_minutes: Some(CHECKPOINT_MINUTES),
+        resume,
+        ..Default::default()
+    };
+    run_case_with(loaded, out, &options, &mut |_| {}).map_err(|e| e.to_string())
 }
 
 /// Columns of a CSV file written by a run, by header name.
@@ -90,4 +133,88 @@ pub fn line(label: &str, x: Vec<f64>, y: Vec<f64>) -> (Series, Style) {
         },
         Style::Line,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+
+    const TANK: &str = r#"
+name = "resumable"
+dim = 2
+boundary = "energy"
+[fluid]
+density = 1000.0
+sound_speed = 10.0
+gravity = [0.0, -9.81]
+[resolution]
+dx = 0.05
+h_over_dx = 2.0
+[time]
+end = 0.03
+[output]
+vtk_interval = 0.0
+series_interval = 0.005
+[settle]
+enabled = false
+[[fluid_block]]
+shape = "box"
+min = [0.0, 0.0]
+max = [0.4, 0.2]
+pressure = "hydrostatic"
+[[wall]]
+shape = "box"
+min = [0.0, 0.0]
+max = [0.4, 0.4]
+open = ["+y"]
+"#;
+
+    fn tank(overrides: &[&str]) -> LoadedCase {
+        load("resumable", TANK, overrides).unwrap()
+    }
+
+    /// A run stopped part-way continues from its checkpoint when the same build runs the same
+    /// case into its folder again, and ends with the outputs of an uninterrupted run; a
+    /// different case starts afresh.
+    #[test]
+    fn a_stopped_run_resumes_with_the_figures_of_an_uninterrupted_one() {
+        let root = std::env::temp_dir().join(format!("bisph-resumable-{}", std::process::id()));
+        let (stopped, whole) = (root.join("stopped"), root.join("whole"));
+        let loaded = tank(&[]);
+        let stop_now = |dir: &Path, loaded: &LoadedCase| {
+            std::fs::create_dir_all(dir).unwrap();
+            std::fs::write(dir.join(BUILD_FILE), build_fingerprint().unwrap()).unwrap();
+            // Stopped as a signal stops a run, some steps in.
+            let stop = AtomicBool::new(false);
+            let options = RunOptions {
+                stop: Some(&stop),
+                ..Default::default()
+            };
+            let mut on_progress = |p: bisph_io::run::runner::Progress| {
+                if p.step >= 5 {
+                    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                }
+            };
+            let stopped = run_case_with(loaded, dir, &options, &mut on_progress);
+            assert!(
+                matches!(stopped, Err(bisph_io::run::RunError::Interrupted { step, .. }) if step >= 5),
+                "{stopped:?}"
+            );
+            assert!(dir.join(checkpoint::FILE_NAME).exists());
+        };
+        stop_now(&stopped, &loaded);
+        let resumed = run_resumable(&loaded, &stopped).unwrap();
+        assert!(resumed.resumed_from_step.is_some(), "not resumed");
+        let uninterrupted = run_resumable(&loaded, &whole).unwrap();
+        assert!(uninterrupted.resumed_from_step.is_none());
+        assert_eq!(resumed.steps, uninterrupted.steps);
+        let series = |dir: &Path| std::fs::read(dir.join("energy.csv")).unwrap();
+        assert_eq!(series(&stopped), series(&whole));
+
+        stop_now(&stopped, &loaded);
+        let other = run_resumable(&tank(&["time.end=0.02"]), &stopped).unwrap();
+        assert!(other.resumed_from_step.is_none(), "another case resumed");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 }
