@@ -17,7 +17,7 @@
 //! validation, hours long, continues where a stopped invocation left it.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
-use crate::support::build_fingerprint;
+use crate::support::{build_fingerprint, written_by, BUILD_FILE};
 use bisph_core::{Simulation, Vector};
 use bisph_io::case::{build_simulation, parse_case, CaseDim};
 use bisph_io::formats::plot::line_plot_png as plot;
@@ -195,7 +195,6 @@ const PACE: Pace = Pace {
 /// and, once the run has ended, its result. A run starts afresh where the build differs.
 const STATE_FILE: &str = "checkpoint.bin";
 const SERIES_FILE: &str = "series.json";
-const BUILD_FILE: &str = "build.txt";
 const RESULT_FILE: &str = "result.json";
 
 /// What a run's folder holds of an earlier invocation by this build.
@@ -209,7 +208,7 @@ enum Saved<V: Vector> {
 /// Reads what `dir` holds of an earlier invocation of build `build`; anything else in it
 /// (another build's files, a state whose measurements do not reach it) is cleared.
 fn saved<V: CaseDim>(dir: &Path, build: &str) -> Result<Saved<V>, String> {
-    let same_build = std::fs::read_to_string(dir.join(BUILD_FILE)).is_ok_and(|b| b == build);
+    let same_build = written_by(dir, build);
     let json = |name: &str| -> Option<StillWaterRun> {
         let text = std::fs::read_to_string(dir.join(name)).ok()?;
         serde_json::from_str(&text).ok()

@@ -26,8 +26,13 @@ pub fn build_fingerprint() -> Result<String, String> {
     Ok(format!("{:016x}", checkpoint::fnv1a64(&bytes)))
 }
 
-/// The file naming the build that writes a resumable run's folder.
-const BUILD_FILE: &str = "build.txt";
+/// The file naming the build that wrote a resumable run's folder.
+pub const BUILD_FILE: &str = "build.txt";
+
+/// Whether build `build` wrote the folder `dir` (its [`BUILD_FILE`]).
+pub fn written_by(dir: &Path, build: &str) -> bool {
+    std::fs::read_to_string(dir.join(BUILD_FILE)).is_ok_and(|b| b == build)
+}
 
 /// Minutes of wall clock between two checkpoints of a resumable run.
 const CHECKPOINT_MINUTES: f64 = 10.0;
@@ -38,8 +43,7 @@ const CHECKPOINT_MINUTES: f64 = 10.0;
 /// figures of an uninterrupted run. Anything else in `out` is cleared first.
 pub fn run_resumable(loaded: &LoadedCase, out: &Path) -> Result<Summary, String> {
     let build = build_fingerprint()?;
-    let same_build = std::fs::read_to_string(out.join(BUILD_FILE)).is_ok_and(|b| b == build);
-    let resume = same_build
+    let resume = written_by(out, &build)
         && out.join(checkpoint::FILE_NAME).exists()
         && resume_case(out).is_ok_and(|saved| saved.text == loaded.text);
     if !resume {
