@@ -10,7 +10,6 @@ use bisph_io::formats::mesh_files::{write_stl_ascii, write_stl_binary};
 use bisph_io::parse_case;
 use glam::DVec3;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 const LO: [f64; 3] = [0.0, 0.0, 0.0];
 const HI: [f64; 3] = [0.4, 0.3, 0.3];
@@ -40,10 +39,12 @@ fn triangles(shapes: &[ElementShape<DVec3>]) -> Vec<[DVec3; 3]> {
         .collect()
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bisph-mesh-walls-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A fresh folder for one test's files, removed when dropped.
+fn scratch() -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix("bisph-mesh-walls-")
+        .tempdir()
+        .unwrap()
 }
 
 fn case(wall: &str, boundary: &str) -> String {
@@ -134,7 +135,8 @@ fn closed_box_obj_of_quads_matches_the_primitive_box() {
         }
         let _ = writeln!(obj, "f -4 -3 -2 -1");
     }
-    let path = temp("box.obj");
+    let dir = scratch();
+    let path = dir.path().join("box.obj");
     std::fs::write(&path, obj).unwrap();
     for boundary in ["energy", "bi"] {
         let a = primitive(boundary);
@@ -163,13 +165,14 @@ fn closed_box_stl_matches_the_primitive_box() {
         DX,
     ));
     let soup = triangles(&tris);
-    let ascii = temp("box-ascii.stl");
+    let dir = scratch();
+    let ascii = dir.path().join("box-ascii.stl");
     write_stl_ascii(&ascii, &soup).unwrap();
     // Binary STL stores f32: the box corners here are exact in f32 only up to rounding.
-    let binary = temp("box-binary.stl");
+    let binary = dir.path().join("box-binary.stl");
     write_stl_binary(&binary, &soup).unwrap();
     // A coarse STL: 12 triangles, refined by the reader to elements of about dx.
-    let coarse = temp("box-coarse.stl");
+    let coarse = dir.path().join("box-coarse.stl");
     let coarse_soup = triangles(&triangulate(box_elements_3d(
         DVec3::from_array(LO),
         DVec3::from_array(HI),
@@ -211,7 +214,8 @@ fn transformed_mesh_walls_and_named_errors() {
         &[],
         1.0,
     )));
-    let path = temp("unit.stl");
+    let dir = scratch();
+    let path = dir.path().join("unit.stl");
     write_stl_ascii(&path, &unit).unwrap();
     let moved = build(
         &format!(
@@ -231,7 +235,7 @@ fn transformed_mesh_walls_and_named_errors() {
     assert!((area - 1.5).abs() < 1e-12);
 
     // Open mesh: drop a triangle.
-    let open = temp("open.stl");
+    let open = dir.path().join("open.stl");
     write_stl_ascii(&open, &unit[1..]).unwrap();
     let text = case(
         &format!("shape = \"mesh\"\nfile = \"{}\"", open.display()),
@@ -242,7 +246,7 @@ fn transformed_mesh_walls_and_named_errors() {
     // Inconsistent: one triangle reversed.
     let mut flipped = unit.clone();
     flipped[5].swap(1, 2);
-    let bad = temp("flipped.stl");
+    let bad = dir.path().join("flipped.stl");
     write_stl_binary(&bad, &flipped).unwrap();
     let text = case(
         &format!("shape = \"mesh\"\nfile = \"{}\"", bad.display()),
@@ -254,7 +258,7 @@ fn transformed_mesh_walls_and_named_errors() {
         "{e}"
     );
     // Degenerate face in an OBJ.
-    let obj = temp("degenerate.obj");
+    let obj = dir.path().join("degenerate.obj");
     std::fs::write(
         &obj,
         "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n",

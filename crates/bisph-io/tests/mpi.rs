@@ -61,8 +61,11 @@ fn whole_trace<V: Vector + CaseDim>(case: &SplitCase) -> Vec<String> {
 /// Every case on 1 to 4 ranks against one process.
 fn compare_all() {
     let program = std::env::current_exe().expect("the test program's path");
-    let dir = std::env::temp_dir().join(format!("bisph-mpi-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let scratch = tempfile::Builder::new()
+        .prefix("bisph-mpi-")
+        .tempdir()
+        .expect("a scratch folder");
+    let dir = scratch.path();
     let mut failures = Vec::new();
     for (index, case) in SPLIT_CASES.iter().enumerate() {
         let expected = if case.three_d {
@@ -88,7 +91,6 @@ fn compare_all() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(
         failures.is_empty(),
         "runs that differ from one process: {failures:?}"

@@ -42,7 +42,11 @@ position = [0.5, 0.0]
 
 #[test]
 fn a_caller_built_run_writes_the_series_of_a_whole_run() {
-    let dir = std::env::temp_dir().join(format!("bisph-run-built-{}", std::process::id()));
+    let scratch = tempfile::Builder::new()
+        .prefix("bisph-run-built-")
+        .tempdir()
+        .unwrap();
+    let dir = scratch.path();
     let (whole, built) = (dir.join("whole"), dir.join("built"));
     let loaded = parse_case("<tank>", TANK, &[]).unwrap();
     let a = run_case(&loaded, &whole, &mut |_| {}).unwrap();
@@ -85,5 +89,4 @@ fn a_caller_built_run_writes_the_series_of_a_whole_run() {
             assert_eq!(a, b, "{file}");
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

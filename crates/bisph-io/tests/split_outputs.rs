@@ -24,13 +24,10 @@ fn case(name: &str, overrides: &[&str]) -> LoadedCase {
     load_case(Some(&path), &overrides).unwrap()
 }
 
-/// A fresh folder for one run of this test program.
-fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir()
-        .join(format!("bisph-split-outputs-{}", std::process::id()))
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+/// A fresh, empty folder for one run, removed when dropped.
+fn folder(name: &str) -> tempfile::TempDir {
+    let prefix = format!("bisph-split-outputs-{name}-");
+    tempfile::Builder::new().prefix(&prefix).tempdir().unwrap()
 }
 
 /// The run of `loaded` into `out` split into `parts` parts, each on its own thread; the result
@@ -165,17 +162,19 @@ fn assert_same_outputs(whole: &Path, split: &Path, parts: usize, run: &str) {
 
 /// Runs `loaded` whole and split into 2 and 3 parts, and compares their outputs.
 fn check(name: &str, loaded: &LoadedCase) {
-    let whole = folder(&format!("{name}-whole"));
-    let summary = whole_run(loaded, &whole).unwrap();
+    let whole_folder = folder(&format!("{name}-whole"));
+    let whole = whole_folder.path();
+    let summary = whole_run(loaded, whole).unwrap();
     assert!(summary.steps >= 20, "{name}: {} steps", summary.steps);
     for parts in [2, 3] {
-        let split = folder(&format!("{name}-{parts}"));
-        let runs = split_run(loaded, &split, parts, false, None);
+        let split_folder = folder(&format!("{name}-{parts}"));
+        let split = split_folder.path();
+        let runs = split_run(loaded, split, parts, false, None);
         for run in runs {
             let s = run.unwrap();
             assert_eq!((s.steps, s.ranks), (summary.steps, parts), "{name}");
         }
-        assert_same_outputs(&whole, &split, parts, &format!("{name}, {parts} parts"));
+        assert_same_outputs(whole, split, parts, &format!("{name}, {parts} parts"));
     }
 }
 
@@ -239,12 +238,14 @@ fn a_split_run_stopped_at_a_checkpoint_resumes_on_other_parts_to_the_end_of_the_
             "output.vtk_interval=0.05",
         ],
     );
-    let whole = folder("resume-whole");
-    let summary = whole_run(&loaded, &whole).unwrap();
+    let whole_folder = folder("resume-whole");
+    let whole = whole_folder.path();
+    let summary = whole_run(&loaded, whole).unwrap();
     // Stopped on 2 parts, resumed on 3; stopped on 3 parts, resumed in one process.
     for (first, then) in [(2, 3), (3, 1)] {
-        let split = folder(&format!("resume-{first}-{then}"));
-        for run in split_run(&loaded, &split, first, false, Some(summary.steps / 2)) {
+        let split_folder = folder(&format!("resume-{first}-{then}"));
+        let split = split_folder.path();
+        for run in split_run(&loaded, split, first, false, Some(summary.steps / 2)) {
             assert!(
                 matches!(run, Err(RunError::Interrupted { .. })),
                 "{first} parts: {:?}",
@@ -258,15 +259,15 @@ fn a_split_run_stopped_at_a_checkpoint_resumes_on_other_parts_to_the_end_of_the_
                     resume: true,
                     ..RunOptions::default()
                 };
-                vec![run_case_with(&loaded, &split, &options, &mut |_| {})]
+                vec![run_case_with(&loaded, split, &options, &mut |_| {})]
             }
-            _ => split_run(&loaded, &split, then, true, None),
+            _ => split_run(&loaded, split, then, true, None),
         };
         for end in ends {
             let s = end.unwrap();
             assert_eq!(s.resumed_from_step, Some(summary.steps / 2));
         }
-        let series = files(&whole, ".csv");
+        let series = files(whole, ".csv");
         for name in &series {
             let same = std::fs::read(whole.join(name)).unwrap()
                 == std::fs::read(split.join(name)).unwrap();
@@ -275,8 +276,8 @@ fn a_split_run_stopped_at_a_checkpoint_resumes_on_other_parts_to_the_end_of_the_
                 "stopped on {first}, resumed on {then}: {name} differs"
             );
         }
-        assert_eq!(summary_figures(&whole)["energy_total_final"], {
-            summary_figures(&split)["energy_total_final"].clone()
+        assert_eq!(summary_figures(whole)["energy_total_final"], {
+            summary_figures(split)["energy_total_final"].clone()
         });
     }
 }
@@ -294,13 +295,15 @@ fn a_tripped_watch_in_a_split_run_reports_what_the_whole_run_reports() {
             "output.vtk_interval=0.1",
         ],
     );
-    let whole = folder("trip-whole");
-    let Err(RunError::Stopped(expected)) = whole_run(&loaded, &whole) else {
+    let whole_folder = folder("trip-whole");
+    let whole = whole_folder.path();
+    let Err(RunError::Stopped(expected)) = whole_run(&loaded, whole) else {
         panic!("the watch did not trip in the whole run");
     };
     assert!(expected.step > 50, "tripped at step {}", expected.step);
-    let split = folder("trip-3");
-    for run in split_run(&loaded, &split, 3, false, None) {
+    let split_folder = folder("trip-3");
+    let split = split_folder.path();
+    for run in split_run(&loaded, split, 3, false, None) {
         let Err(RunError::Stopped(d)) = run else {
             panic!("the watch did not trip in the split run");
         };
@@ -320,8 +323,8 @@ fn a_tripped_watch_in_a_split_run_reports_what_the_whole_run_reports() {
         d.as_object_mut().unwrap().remove("vtk_frame");
         d
     };
-    assert_eq!(text(&whole), text(&split));
-    for name in files(&whole, ".csv") {
+    assert_eq!(text(whole), text(split));
+    for name in files(whole, ".csv") {
         let same =
             std::fs::read(whole.join(&name)).unwrap() == std::fs::read(split.join(&name)).unwrap();
         assert!(same, "{name} differs");
@@ -343,6 +346,6 @@ fn a_tripped_watch_in_a_split_run_reports_what_the_whole_run_reports() {
         let state = format!("{state:?}");
         (state, format!("{:?} {:?}", c.history, c.probe_history))
     };
-    let (a, b) = (saved(&whole), saved(&split));
+    let (a, b) = (saved(whole), saved(split));
     assert!(a == b, "the checkpoints differ");
 }

@@ -53,7 +53,11 @@ mod tests {
 
     #[test]
     fn the_first_folder_holding_the_file_wins() {
-        let root = std::env::temp_dir().join(format!("bisph-data-find-{}", std::process::id()));
+        let scratch = tempfile::Builder::new()
+            .prefix("bisph-data-find-")
+            .tempdir()
+            .unwrap();
+        let root = scratch.path();
         let (a, b) = (root.join("a"), root.join("b"));
         std::fs::create_dir_all(b.join("case")).unwrap();
         std::fs::write(b.join("case/x.dat"), "1").unwrap();
@@ -69,6 +73,5 @@ mod tests {
             "{err}"
         );
         assert!(err.contains(DATA_ENV), "{err}");
-        std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -571,7 +571,11 @@ mod tests {
             models: &[],
             ..*box_2d
         };
-        let root = std::env::temp_dir().join(format!("bisph-still-water-{}", std::process::id()));
+        let scratch = tempfile::Builder::new()
+            .prefix("bisph-still-water-")
+            .tempdir()
+            .unwrap();
+        let root = scratch.path();
         let every_sample = |stop_after| Pace {
             save_every: Duration::ZERO,
             stop_after,
@@ -609,6 +613,5 @@ mod tests {
         assert_eq!(figures(&recalled), figures(&whole));
         let other = run_tank::<DVec2>(&tank, &BI, true, &b, "two", &every_sample(Some(0)));
         assert_eq!(other.unwrap_err(), "stopped after sample 0");
-        let _ = std::fs::remove_dir_all(&root);
     }
 }

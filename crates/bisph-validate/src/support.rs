@@ -183,7 +183,11 @@ open = ["+y"]
     /// different case starts afresh.
     #[test]
     fn a_stopped_run_resumes_with_the_figures_of_an_uninterrupted_one() {
-        let root = std::env::temp_dir().join(format!("bisph-resumable-{}", std::process::id()));
+        let scratch = tempfile::Builder::new()
+            .prefix("bisph-resumable-")
+            .tempdir()
+            .unwrap();
+        let root = scratch.path();
         let (stopped, whole) = (root.join("stopped"), root.join("whole"));
         let loaded = tank(&[]);
         let stop_now = |dir: &Path, loaded: &LoadedCase| {
@@ -219,6 +223,5 @@ open = ["+y"]
         stop_now(&stopped, &loaded);
         let other = run_resumable(&tank(&["time.end=0.02"]), &stopped).unwrap();
         assert!(other.resumed_from_step.is_none(), "another case resumed");
-        std::fs::remove_dir_all(&root).unwrap();
     }
 }

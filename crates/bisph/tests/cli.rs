@@ -5,9 +5,9 @@
 mod common;
 use common::{bisph, cases_dir};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn temp_dir(name: &str) -> PathBuf {
+fn temp_dir(name: &str) -> common::Scratch {
     common::temp_dir("test", name)
 }
 

@@ -4,7 +4,7 @@
 mod common;
 use common::bisph;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const TANK_2D: &str = r#"
 name = "t"
@@ -184,6 +184,18 @@ fn a_3d_open_mesh_flipped_into_the_fluid_is_refused() {
 
 /// Runs `case` for its few steps and returns `summary.json`'s particle count.
 fn fluid_particles(name: &str, case: &str) -> u64 {
+    particles_in(&run_briefly(name, case))
+}
+
+/// The fluid particle count of `summary.json` in `dir/out`.
+fn particles_in(dir: &Path) -> u64 {
+    let text = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    summary["fluid_particles"].as_u64().unwrap()
+}
+
+/// Runs `case` for its few steps into `out` of the folder returned.
+fn run_briefly(name: &str, case: &str) -> common::Scratch {
     let dir = common::temp_dir("geometry", name);
     std::fs::write(dir.join("cube.stl"), cube_stl()).unwrap();
     let file = dir.join("case.toml");
@@ -205,9 +217,7 @@ fn fluid_particles(name: &str, case: &str) -> u64 {
         "{name}: {}",
         String::from_utf8_lossy(&o.stderr)
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    summary["fluid_particles"].as_u64().unwrap()
+    dir
 }
 
 #[test]
@@ -329,16 +339,15 @@ fn walls_block_keys_are_checked() {
 /// the fluid particles of that first frame.
 fn first_frame(name: &str, case: &str) -> (u64, Vec<[f64; 3]>) {
     let case = format!("{case}[output]\nvtk_interval = 0.001\nplots = false\n");
-    let n = fluid_particles(name, &case);
-    // The folder `fluid_particles` ran in.
-    let frame = std::env::temp_dir()
-        .join(format!("bisph-geometry-{}-{name}", std::process::id()))
-        .join("out/vtk/fluid_000000.vtu");
-    (n, vtu_points(&frame))
+    let dir = run_briefly(name, &case);
+    (
+        particles_in(&dir),
+        vtu_points(&dir.join("out/vtk/fluid_000000.vtu")),
+    )
 }
 
 /// The points of a `.vtu` file written by `bisph` (appended raw data, `UInt64` headers).
-fn vtu_points(path: &std::path::Path) -> Vec<[f64; 3]> {
+fn vtu_points(path: &Path) -> Vec<[f64; 3]> {
     let bytes = std::fs::read(path).unwrap();
     let find = |from: usize, pattern: &str| {
         from + bytes[from..]

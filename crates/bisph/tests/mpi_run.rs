@@ -5,7 +5,9 @@
 //! another number of ranks ends with the same series; unbound ranks without `--threads` share
 //! the cores. Needs the `mpi` feature and Open MPI's `mpirun`.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
@@ -13,13 +15,9 @@ fn case(name: &str) -> String {
     format!("{}/../../cases/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A fresh folder for one run of this test program.
-fn folder(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir()
-        .join(format!("bisph-mpi-run-{}", std::process::id()))
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+/// A fresh, empty folder for one run, removed when dropped.
+fn folder(name: &str) -> common::Scratch {
+    common::temp_dir("mpi-run", name)
 }
 
 /// `bisph ARGS` under `mpirun -np ranks` (one thread each), or alone for 1 rank.
@@ -168,8 +166,8 @@ const CASES: [(&str, &[&str]); 4] = [
 fn a_run_split_over_ranks_writes_the_series_of_one_process() {
     for (name, settings) in CASES {
         let path = case(name);
-        let dirs: Vec<PathBuf> = (0..=4).map(|r| folder(&format!("{name}-{r}"))).collect();
-        let out = |ranks: usize| dirs[ranks].clone();
+        let dirs: Vec<common::Scratch> = (0..=4).map(|r| folder(&format!("{name}-{r}"))).collect();
+        let out = |ranks: usize| dirs[ranks].to_path_buf();
         let mut lines = 0;
         for ranks in 1..=4 {
             let dir = out(ranks).display().to_string();

@@ -3,10 +3,10 @@
 mod common;
 use common::{bisph, cases_dir};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn temp_dir(name: &str) -> PathBuf {
+fn temp_dir(name: &str) -> common::Scratch {
     common::temp_dir("rel", name)
 }
 

@@ -6,7 +6,7 @@
 mod common;
 use common::cases_dir;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -14,7 +14,7 @@ fn exe() -> Command {
     Command::new(env!("CARGO_BIN_EXE_bisph"))
 }
 
-fn temp_dir(name: &str) -> PathBuf {
+fn temp_dir(name: &str) -> common::Scratch {
     common::temp_dir("restart", name)
 }
 
@@ -346,9 +346,7 @@ fn kill_resume_compare(
         }
         run_to_end(&args);
         compare(&reference, &dir, &format!("{} chain {chain}", case.name));
-        let _ = std::fs::remove_dir_all(&dir);
     }
-    let _ = std::fs::remove_dir_all(&reference);
     (kills, resumes)
 }
 
@@ -540,8 +538,6 @@ fn runs_stopped_while_settling_resume_bit_identically() {
         (v["outcome"].clone(), v["steps"].clone(), v["time"].clone())
     };
     assert_eq!(report(&reference), report(&dir));
-    let _ = std::fs::remove_dir_all(&dir);
-    let _ = std::fs::remove_dir_all(&reference);
 }
 
 /// Sends SIGTERM to `child`.

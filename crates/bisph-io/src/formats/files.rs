@@ -81,7 +81,11 @@ mod tests {
 
     #[test]
     fn stale_temporaries_are_removed_and_other_files_kept() {
-        let dir = std::env::temp_dir().join(format!("bisph-stale-tmp-{}", std::process::id()));
+        let scratch = tempfile::Builder::new()
+            .prefix("bisph-stale-tmp-")
+            .tempdir()
+            .unwrap();
+        let dir = scratch.path();
         std::fs::create_dir_all(dir.join("vtk")).unwrap();
         for name in [
             "checkpoint.bin.tmp",
@@ -91,10 +95,9 @@ mod tests {
         ] {
             std::fs::write(dir.join(name), "x").unwrap();
         }
-        remove_stale_temporaries(&dir);
+        remove_stale_temporaries(dir);
         assert!(!dir.join("checkpoint.bin.tmp").exists());
         assert!(!dir.join("vtk/fluid_000001.vtu.tmp").exists());
         assert!(dir.join("notes.tmp").exists() && dir.join("energy.csv").exists());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

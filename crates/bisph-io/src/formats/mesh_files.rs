@@ -341,15 +341,18 @@ impl Transform {
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("bisph-shapes-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir.join(name)
+    /// A fresh folder for one test's files, removed when dropped.
+    fn scratch() -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix("bisph-shapes-")
+            .tempdir()
+            .unwrap()
     }
 
     #[test]
     fn polygon_files_with_header_comments_and_loops() {
-        let p = temp("poly.csv");
+        let dir = scratch();
+        let p = dir.path().join("poly.csv");
         std::fs::write(
             &p,
             "# comment\nx,y\n0,0\n1,0\n1 1\n\n0.2,0.2\n0.3,0.2\n0.3,0.3 # hole\n",
@@ -370,10 +373,11 @@ mod tests {
             [DVec3::ZERO, DVec3::X, DVec3::Y],
             [DVec3::ZERO, DVec3::Z, DVec3::X],
         ];
-        let b = temp("t.stl");
+        let dir = scratch();
+        let b = dir.path().join("t.stl");
         write_stl_binary(&b, &tris).unwrap();
         assert_eq!(read_stl(&b).unwrap(), tris);
-        let a = temp("ta.stl");
+        let a = dir.path().join("ta.stl");
         write_stl_ascii(&a, &tris).unwrap();
         assert_eq!(read_stl(&a).unwrap(), tris);
         std::fs::write(&a, "not an stl").unwrap();

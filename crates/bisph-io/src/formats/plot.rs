@@ -285,11 +285,10 @@ mod tests {
 
     const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', b'\r', b'\n', 0x1a, b'\n'];
 
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("bisph-plot-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh, empty folder for one test, removed when dropped.
+    fn scratch(name: &str) -> tempfile::TempDir {
+        let prefix = format!("bisph-plot-{name}-");
+        tempfile::Builder::new().prefix(&prefix).tempdir().unwrap()
     }
 
     fn series(label: &str, x: Vec<f64>, y: Vec<f64>) -> Series {
@@ -302,7 +301,8 @@ mod tests {
 
     #[test]
     fn two_series_png() {
-        let dir = scratch("two");
+        let scratch = scratch("two");
+        let dir = scratch.path();
         let path = dir.join("dam_break.png");
         let x: Vec<f64> = (0..200).map(|i| i as f64 * 0.02).collect();
         let y: Vec<f64> = x.iter().map(|t| 1.0 + 0.5 * (2.0 * t).sin()).collect();
@@ -324,14 +324,15 @@ mod tests {
         let bytes = std::fs::read(&path).unwrap();
         assert!(bytes.starts_with(&PNG_SIGNATURE));
         assert!(!dir.join("dam_break.png.tmp.png").exists());
-        if std::env::var_os("BISPH_KEEP_PLOT").is_none() {
-            std::fs::remove_dir_all(&dir).unwrap();
+        if std::env::var_os("BISPH_KEEP_PLOT").is_some() {
+            eprintln!("plot kept in {}", scratch.keep().display());
         }
     }
 
     #[test]
     fn degenerate_data_does_not_fail() {
-        let dir = scratch("degenerate");
+        let scratch = scratch("degenerate");
+        let dir = scratch.path();
         let nan = f64::NAN;
         let inf = f64::INFINITY;
         let cases: Vec<Vec<(Series, Style)>> = vec![
@@ -370,12 +371,12 @@ mod tests {
                 assert!(std::fs::read(&path).unwrap().starts_with(&PNG_SIGNATURE));
             }
         }
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn errors_name_the_file() {
-        let dir = scratch("errors");
+        let scratch = scratch("errors");
+        let dir = scratch.path();
         let plot = Plot {
             series: vec![(series("bad", vec![1.0, 2.0], vec![1.0]), Style::Line)],
             ..Plot::default()
@@ -391,7 +392,6 @@ mod tests {
         let missing = dir.join("no/such/dir/out.png");
         let e = write_png(&Plot::default(), &missing, 400, 300).unwrap_err();
         assert!(e.to_string().contains("out.png"), "{e}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -427,12 +427,10 @@ fn escape_xml(s: &str) -> String {
 mod tests {
     use super::*;
 
-    /// A fresh, empty scratch directory for one test.
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("bisph-vtk-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
+    /// A fresh, empty folder for one test, removed when dropped.
+    fn scratch(name: &str) -> tempfile::TempDir {
+        let prefix = format!("bisph-vtk-{name}-");
+        tempfile::Builder::new().prefix(&prefix).tempdir().unwrap()
     }
 
     fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
@@ -526,7 +524,8 @@ mod tests {
 
     #[test]
     fn points_roundtrip_exact() {
-        let dir = scratch("points");
+        let scratch = scratch("points");
+        let dir = scratch.path();
         let path = dir.join("p.vtu");
         let points = [[0.0, 1.0, 2.0], [-1.5, 1e-300, f64::MAX], [0.1, 0.2, 0.3]];
         let rho = [1000.0, 999.999_999_9, f64::NAN];
@@ -586,12 +585,12 @@ mod tests {
         let (_, np, nc, _) = read_vtu(&path);
         assert_eq!((np, nc), (1, 1));
         assert!(!tmp_path(&path).exists());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn cells_roundtrip_exact() {
-        let dir = scratch("cells");
+        let scratch = scratch("cells");
+        let dir = scratch.path();
         let path = dir.join("c.vtu");
         let verts = [
             [0.0, 0.0, 0.0],
@@ -642,12 +641,12 @@ mod tests {
         );
         assert_eq!(arrays[4].i64s(), [2, 5, 9, 14, 15]);
         assert_eq!(arrays[5].bytes, [3, 5, 9, 7, 1]);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn empty_inputs_give_valid_files() {
-        let dir = scratch("empty");
+        let scratch = scratch("empty");
+        let dir = scratch.path();
         let a = dir.join("a.vtu");
         let b = dir.join("b.vtu");
         let pd = [DataArray {
@@ -668,12 +667,12 @@ mod tests {
         PvdCollection::new().write(&pvd).unwrap();
         let text = std::fs::read_to_string(&pvd).unwrap();
         assert!(text.contains("<Collection>\n  </Collection>\n</VTKFile>"));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn bad_inputs_are_invalid_input() {
-        let dir = scratch("bad");
+        let scratch = scratch("bad");
+        let dir = scratch.path();
         let path = dir.join("x.vtu");
         let pts = [[0.0; 3]; 2];
         let check = |r: io::Result<()>, needle: &str| {
@@ -718,12 +717,12 @@ mod tests {
         // A missing directory is an ordinary I/O error, not a panic.
         let missing = dir.join("no/such/dir/x.vtu");
         assert!(write_points_vtu(&missing, &pts, &[]).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn pvd_lists_entries_in_order() {
-        let dir = scratch("pvd");
+        let scratch = scratch("pvd");
+        let dir = scratch.path();
         let path = dir.join("series.pvd");
         let mut pvd = PvdCollection::new();
         pvd.push(0.0, 0, "fluid_0000.vtu");
@@ -755,7 +754,6 @@ mod tests {
             (2.5e20, 3, "late.vtu".to_string()),
         ];
         assert_eq!(got, want);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -2,6 +2,7 @@
 // Each test file uses a subset of these.
 #![allow(dead_code)]
 
+use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -18,10 +19,19 @@ pub fn cases_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases")
 }
 
-/// A fresh, empty folder `bisph-<tag>-<pid>-<name>` under the system's temporary folder.
-pub fn temp_dir(tag: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("bisph-{tag}-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A test's folder under the system's temporary folder, removed with its content when
+/// dropped; used as the [`Path`] it holds.
+pub struct Scratch(tempfile::TempDir);
+
+impl Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A fresh, empty folder `bisph-<tag>-<name>-<random>` under the system's temporary folder.
+pub fn temp_dir(tag: &str, name: &str) -> Scratch {
+    let prefix = format!("bisph-{tag}-{name}-");
+    Scratch(tempfile::Builder::new().prefix(&prefix).tempdir().unwrap())
 }
