@@ -430,7 +430,9 @@ impl Watch {
     /// [`bisph_core::walls::Walls::near_free_edge`]), or coming from beyond the reach of every
     /// wall or from behind a wall by more than h/100 already, came round the walls to their
     /// back: it left the water's region, and is removed like a particle leaving the domain
-    /// ([`Simulation::remove_own`]) while the run may lose it; the others stop the run.
+    /// ([`Simulation::remove_own`]) while the run may lose it, at any depth: left there, its
+    /// wall terms would see the walls from behind and the water in front through them. The
+    /// others stop the run.
     fn wall_crossing<V: Vector>(
         &mut self,
         sim: &mut Simulation<V>,
@@ -572,7 +574,7 @@ impl Watch {
                         }
                     }
                 }
-                let depth = depth.filter(|&d| d > tolerance)?;
+                let depth = depth.filter(|&d| d > 0.0)?;
                 // Round the walls: over a free edge, or from a place before the step beyond
                 // every wall's reach or already behind a wall by more than the tolerance (a
                 // particle in front of the walls is caught as soon as it gets that deep, so this
@@ -585,14 +587,11 @@ impl Watch {
                                 .walls
                                 .signed_distance(p0, behind_search)
                                 .is_none_or(|d0| d0 > tolerance)));
-                Some((
-                    i,
-                    if around {
-                        Behind::Around(depth)
-                    } else {
-                        Behind::Crossed(depth)
-                    },
-                ))
+                if around {
+                    Some((i, Behind::Around(depth)))
+                } else {
+                    (depth > tolerance).then_some((i, Behind::Crossed(depth)))
+                }
             })
             .collect()
     }
@@ -601,8 +600,8 @@ impl Watch {
 /// How a particle came to lie behind a wall.
 #[derive(Clone, Copy, Debug)]
 enum Behind {
-    /// Through the wall, to this depth: its path crossed an element, or it lies behind the
-    /// wall away from any free edge.
+    /// Through the wall, to this depth (more than h/100): its path crossed an element, or it
+    /// lies behind the wall away from any free edge.
     Crossed(f64),
     /// Round the walls, to this depth, without crossing an element in the step: over a free
     /// edge of a wall (the rim of an open side), or from beyond the reach of every wall or
@@ -844,6 +843,19 @@ mod tests {
         sim.fluid.position[i] = DVec2::new(-0.06 * h, 0.3);
         assert!(watch.check(&mut sim, &previous, 0.0).is_none());
         assert_eq!(sim.removed, 1);
+
+        // Less than h/100 behind: over the rim it is removed all the same (its wall terms would
+        // see the wall from behind); away from the rim the wall term pushes it back.
+        for (y, removed) in [(0.59, 1), (0.3, 0)] {
+            let (mut sim, mut watch, i) = open_tank(0.01);
+            let h = sim.config.kernel.h;
+            sim.fluid.position[i] = DVec2::new(-0.0005 * h, y);
+            let mut previous = SimState::default();
+            previous.capture(&sim);
+            sim.fluid.position[i] = DVec2::new(-0.001 * h, y);
+            assert!(watch.check(&mut sim, &previous, 0.0).is_none());
+            assert_eq!(sim.removed, removed, "y = {y}");
+        }
 
         let (mut sim, mut watch, i) = open_tank(0.0);
         let d = behind_left_wall(&mut sim, &mut watch, i, 0.59)
