@@ -83,6 +83,12 @@ fn assert_same(trace: &Trace, expected: &Trace, run: &str) {
 /// particles handed between parts and the times the regions were cut again, for each split
 /// run.
 fn check<V: CaseDim>(case: &SplitCase) -> Vec<(u64, u64)> {
+    check_counting_kept::<V>(case).0
+}
+
+/// [`check`], and the steps of the whole run that kept its neighbour lists with particles
+/// moved past half the skin.
+fn check_counting_kept<V: CaseDim>(case: &SplitCase) -> (Vec<(u64, u64)>, u64) {
     let mut whole = case.build::<V>();
     let expected = advance(&mut whole, case.steps);
     let start = case.build::<V>();
@@ -93,7 +99,7 @@ fn check<V: CaseDim>(case: &SplitCase) -> Vec<(u64, u64)> {
         assert_eq!(traffic.halo > 0, parts > 1, "{parts} parts: halos");
         assert_same(&trace, &expected, &format!("{parts} parts"));
     }
-    departed
+    (departed, whole.timings.lists_kept_moved)
 }
 
 #[test]
@@ -101,7 +107,8 @@ fn a_breaking_dam_with_energy_walls() {
     // The collapsing column hands particles between parts, and drains the work of the
     // parts that held its top: on 3 and 4 parts the regions are cut again (on 2, the two
     // halves of the column keep their work within 10%).
-    let traffic = check::<glam::DVec2>(&SPLIT_CASES[0]);
+    let (traffic, kept) = check_counting_kept::<glam::DVec2>(&SPLIT_CASES[0]);
+    assert!(kept > 0, "no step kept the lists past half a skin");
     assert_eq!(traffic[0], (0, 0));
     let moved = traffic[1..].iter().all(|&(n, _)| n > 0);
     let cut = traffic[2..].iter().all(|&(_, cuts)| cuts > 0);
@@ -110,7 +117,8 @@ fn a_breaking_dam_with_energy_walls() {
 
 #[test]
 fn a_breaking_dam_in_3d_with_bi_walls_and_geometric_gamma() {
-    let traffic = check::<glam::DVec3>(&SPLIT_CASES[1]);
+    let (traffic, kept) = check_counting_kept::<glam::DVec3>(&SPLIT_CASES[1]);
+    assert!(kept > 0, "no step kept the lists past half a skin");
     assert!(
         traffic[1..].iter().all(|&(n, _)| n > 0),
         "handed over: {traffic:?}"
@@ -189,6 +197,24 @@ fn a_run_that_lost_particles_resumes_on_any_number_of_parts() {
     advance(&mut whole, 300);
     assert_eq!(whole.removed, 40);
     check_resumed::<glam::DVec2>(&case, 300);
+}
+
+#[test]
+fn a_breaking_dam_resumed_while_its_lists_are_kept_past_half_a_skin() {
+    // Resumed right after a step that kept the lists with particles moved past half the
+    // skin: the restored list, grid and wall-distance bounds continue as the run did.
+    let case = SplitCase {
+        steps: 200,
+        ..SPLIT_CASES[0]
+    };
+    let mut whole = case.build::<glam::DVec2>();
+    let mut before = 0;
+    while whole.timings.lists_kept_moved == 0 {
+        advance(&mut whole, 1);
+        before += 1;
+        assert!(before < 2000, "no step kept the lists past half a skin");
+    }
+    check_resumed::<glam::DVec2>(&case, before);
 }
 
 #[test]

@@ -88,10 +88,9 @@ pub const ESTIMATES: &[Estimate] = &[
     e("floating-box-2d", Measured(16.2), Scaled(16.2 * 12.0)),
     e("floating-box-held-2d", Measured(3.6), Measured(13.9)),
     // dx 0.55/45 (364,500 particles, 80,200 elements) to 6 s: about 49,100 steps on 2
-    // threads at 0.45-0.48 s per step early in the flow, 0.6 around t = 1 s and 0.88-0.92
-    // between t = 1.2 and 1.43 s (windows of the run; the list rebuilt every step or two
-    // late in the flow), taken for the rest: 0.85 s per step on the whole.
-    e("spheric-test2", Measured(17.6), Scaled(0.85 * 49_100.0)),
+    // threads at 0.45-0.48 s per step early in the flow and 0.59 at t = 1.39-1.44 s
+    // (windows of the run, docs/performance.md), taken for the rest: 0.6 s per step.
+    e("spheric-test2", Measured(17.6), Scaled(0.6 * 49_100.0)),
     // The paper's setting, one run (500,000 particles) to 0.22 s: 2,750 steps at 3.25 s per
     // step on 2 threads with the scheme's ten iterations (`bisph bench --single
     // apollo,3,500000,2,2,4,0.1`); steps after the impact take fewer.

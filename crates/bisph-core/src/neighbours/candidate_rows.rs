@@ -10,6 +10,7 @@
 //! with the same `r_ij`, so sums over them have the same bits.
 
 use super::grid::{one_at_a_time, CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use super::pair_blocks::{renumbering, BORDER, GONE};
 use crate::dim::Vector;
 use rayon::prelude::*;
 
@@ -22,6 +23,8 @@ pub struct CandidateRows<V> {
     queries: usize,
     /// The largest search radius the rows answer for.
     reach: f64,
+    /// The listing radius, `reach + skin`.
+    listing: f64,
     period: Periodicity<V>,
 }
 
@@ -53,6 +56,7 @@ impl<V: Vector> CandidateRows<V> {
         self.reach = reach;
         self.period = *grid.periodicity();
         let radius = reach + skin;
+        self.listing = radius;
         debug_assert!(
             radius <= grid.cell_size(),
             "a listing radius wider than a cell"
@@ -74,6 +78,78 @@ impl<V: Vector> CandidateRows<V> {
                     block.start.push(block.index.len() as u32);
                 }
             });
+    }
+
+    /// `true` when one of the `moved` items (queries or points, whichever side moves; at
+    /// `now`, and at `then` when the rows were built) lies within the reach of a `fixed`
+    /// item (indexed by `grid`, in cells at least the reach wide) that was farther than the
+    /// listing radius from it at the build: the rows lack that pair. Borderline distances
+    /// count as lacking, as in [`super::PairBlocks::lacks_pair`].
+    pub fn lacks_fixed_partner(
+        &self,
+        grid: &CellGrid<V>,
+        fixed: &[V],
+        moved: &[u32],
+        now: &[V],
+        then: &[V],
+    ) -> bool {
+        let near2 = self.reach * self.reach * (1.0 + BORDER);
+        let listed2 = self.listing * self.listing * (1.0 - BORDER);
+        let image = |d: V| self.period.minimum_image(d);
+        moved.par_iter().any(|&m| {
+            let (x, x0) = (now[m as usize], then[m as usize]);
+            let mut lacks = false;
+            grid.for_each_candidate_within_shifted(x, self.reach, |j, _| {
+                lacks |= image(fixed[j] - x).length_squared() < near2
+                    && image(fixed[j] - x0).length_squared() >= listed2;
+            });
+            lacks
+        })
+    }
+
+    /// Keeps the rows of the queries `kept` (old indices, increasing), renumbered `0..` in
+    /// that order.
+    pub fn retain_queries(&mut self, kept: &[u32]) {
+        let old = std::mem::take(&mut self.blocks);
+        let row = |i: usize| {
+            let block = &old[i / Self::BLOCK];
+            let k = i % Self::BLOCK;
+            &block.index[block.start[k] as usize..block.start[k + 1] as usize]
+        };
+        self.blocks = kept
+            .par_chunks(Self::BLOCK)
+            .map(|queries| {
+                let mut block = RowBlock::default();
+                block.start.push(0);
+                for &i in queries {
+                    block.index.extend_from_slice(row(i as usize));
+                    block.start.push(block.index.len() as u32);
+                }
+                block
+            })
+            .collect();
+        self.queries = kept.len();
+    }
+
+    /// Keeps the points `kept` (old indices of `len` points, increasing) in every row,
+    /// renumbered `0..` in that order.
+    pub fn retain_points(&mut self, kept: &[u32], len: usize) {
+        let renumbered = renumbering(kept, len);
+        self.blocks.par_iter_mut().for_each(|block| {
+            let mut n = 0;
+            let mut from = 0;
+            for k in 0..block.start.len() - 1 {
+                let end = block.start[k + 1] as usize;
+                for c in from..end {
+                    let j = renumbered[block.index[c] as usize];
+                    block.index[n] = j;
+                    n += usize::from(j != GONE);
+                }
+                from = end;
+                block.start[k + 1] = n as u32;
+            }
+            block.index.truncate(n);
+        });
     }
 
     /// Number of queries listed.
@@ -237,6 +313,102 @@ mod tests {
                 assert_eq!(listed, expected, "query {i}, radius {radius}");
             }
         }
+    }
+
+    /// Rows from moving queries to fixed points lack a pair exactly when a query moved within
+    /// the reach of a point it was not listed with; when they lack none, they find every
+    /// point within the reach.
+    fn check_lacking<V: Vector>(all: Vec<V>, reach: f64, period: Periodicity<V>) {
+        let all: Vec<V> = all.into_iter().map(|p| period.wrap(p)).collect();
+        let (queries, points) = all.split_at(all.len() / 3);
+        let skin = 0.2 * reach;
+        let mut grid = CellGrid::with_period(reach + skin, period).unwrap();
+        grid.rebuild(points);
+        let mut rows = CandidateRows::default();
+        rows.rebuild(&grid, queries, points, reach, skin);
+        let everyone: Vec<u32> = (0..queries.len() as u32).collect();
+        let (mut lacking, mut complete) = (0, 0);
+        for step in 1..=10 {
+            let now = moved(queries, step as f64 * 0.1 * reach, 9, &period);
+            let distance2 = |x: V, j: usize| period.minimum_image(points[j] - x).length_squared();
+            for i in 0..queries.len() {
+                let one = &everyone[i..i + 1];
+                let lacks = rows.lacks_fixed_partner(&grid, points, one, &now, queries);
+                let truth = (0..points.len()).any(|j| {
+                    distance2(now[i], j) < reach * reach
+                        && distance2(queries[i], j) >= (reach + skin) * (reach + skin)
+                });
+                assert_eq!(lacks, truth, "query {i} after moves of {step} x 0.1 reach");
+                if lacks {
+                    lacking += 1;
+                    continue;
+                }
+                complete += 1;
+                let mut found = 0;
+                rows.for_each_within(i, now[i], points, reach, |_, _, _| found += 1);
+                let brute = (0..points.len())
+                    .filter(|&j| distance2(now[i], j) < reach * reach)
+                    .count();
+                assert_eq!(found, brute, "query {i}");
+            }
+        }
+        assert!(
+            lacking > 0 && complete > 0,
+            "{lacking} lacking, {complete} complete"
+        );
+    }
+
+    /// Rows that drop some queries and some points are the rows built without them.
+    fn check_retained<V: Vector>(all: Vec<V>, reach: f64, period: Periodicity<V>) {
+        let all: Vec<V> = all.into_iter().map(|p| period.wrap(p)).collect();
+        let (queries, points) = all.split_at(all.len() / 3);
+        let skin = 0.2 * reach;
+        let rows_of = |queries: &[V], points: &[V]| {
+            let mut grid = CellGrid::with_period(reach + skin, period).unwrap();
+            grid.rebuild(points);
+            let mut rows = CandidateRows::default();
+            rows.rebuild(&grid, queries, points, reach, skin);
+            let listed: Vec<Vec<usize>> = (0..queries.len())
+                .map(|i| {
+                    let mut row = Vec::new();
+                    rows.for_each_within(i, queries[i], points, reach, |j, _, _| row.push(j));
+                    row
+                })
+                .collect();
+            (rows, listed)
+        };
+        let kept_queries: Vec<u32> = (0..queries.len() as u32).filter(|i| i % 3 != 1).collect();
+        let kept_points: Vec<u32> = (0..points.len() as u32).filter(|i| i % 4 != 0).collect();
+        let pick = |v: &[V], kept: &[u32]| kept.iter().map(|&i| v[i as usize]).collect::<Vec<V>>();
+        let (queries2, points2) = (pick(queries, &kept_queries), pick(points, &kept_points));
+        let (mut rows, _) = rows_of(queries, points);
+        rows.retain_queries(&kept_queries);
+        rows.retain_points(&kept_points, points.len());
+        let (_, expected) = rows_of(&queries2, &points2);
+        assert_eq!(rows.len(), queries2.len());
+        for (i, want) in expected.iter().enumerate() {
+            let mut row = Vec::new();
+            rows.for_each_within(i, queries2[i], &points2, reach, |j, _, _| row.push(j));
+            assert_eq!(&row, want, "query {i}");
+        }
+    }
+
+    #[test]
+    fn rows_without_removed_queries_and_points_are_the_rows_built_without_them() {
+        let (p2, period2, p3, period3) = point_clouds(5);
+        check_retained(p2.clone(), 0.06, Periodicity::none());
+        check_retained(p2, 0.06, period2);
+        check_retained(p3.clone(), 0.12, Periodicity::none());
+        check_retained(p3, 0.12, period3);
+    }
+
+    #[test]
+    fn rows_lack_a_pair_exactly_when_a_query_moved_near_an_unlisted_point() {
+        let (p2, period2, p3, period3) = point_clouds(3);
+        check_lacking(p2.clone(), 0.06, Periodicity::none());
+        check_lacking(p2, 0.06, period2);
+        check_lacking(p3.clone(), 0.12, Periodicity::none());
+        check_lacking(p3, 0.12, period3);
     }
 
     #[test]

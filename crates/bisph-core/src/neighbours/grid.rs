@@ -820,30 +820,6 @@ impl<V: Vector> PairList<V> {
     }
 }
 
-/// The largest squared displacement from `origin` to `points` (minimum image across periodic
-/// axes), `None` when their lengths differ: a maximum, the same for any split into threads.
-pub(super) fn largest_drift<V: Vector>(
-    origin: &[V],
-    points: &[V],
-    period: &Periodicity<V>,
-) -> Option<f64> {
-    if points.len() != origin.len() {
-        return None;
-    }
-    let periodic = period.any();
-    let largest = points
-        .par_iter()
-        .zip(origin.par_iter())
-        .with_min_len(4096)
-        .map(|(&p, &o)| {
-            let d = p - o;
-            let d = if periodic { period.minimum_image(d) } else { d };
-            d.length_squared()
-        })
-        .reduce(|| 0.0, f64::max);
-    Some(largest)
-}
-
 /// Morton key of cell coordinates: their bits interleaved (`dim` = 2 or 3 axes, at most
 /// 32 or 21 bits each).
 fn morton_key(c: [usize; 3], dim: usize) -> u64 {

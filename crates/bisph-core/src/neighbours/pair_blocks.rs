@@ -21,7 +21,7 @@
 //! with the same keys in the same lattice cells, so every own particle meets its pairs in
 //! the order of the whole run.
 
-use super::grid::{largest_drift, CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
+use super::grid::{CellGrid, KeptBlock, Periodicity, KEPT_BLOCK};
 use crate::dim::Vector;
 use rayon::prelude::*;
 
@@ -36,6 +36,8 @@ pub struct PairBlocks<V> {
     origin: Vec<V>,
     /// Points whose pairs are listed: the pairs with at least one of the first `owned`.
     owned: usize,
+    /// The square of the listing radius.
+    listing_r2: f64,
     period: Periodicity<V>,
 }
 
@@ -51,6 +53,10 @@ struct BlockChunk {
     start: Vec<u32>,
     second: Vec<u32>,
 }
+
+/// The relative margin on squared distances by which the checks of a kept list err towards
+/// rebuilding it.
+pub(super) const BORDER: f64 = 1e-9;
 
 /// About this many particles per chunk (a chunk is a task of the sweep).
 const CHUNK_PARTICLES: usize = 2048;
@@ -71,6 +77,7 @@ impl<V: Vector> PairBlocks<V> {
         self.partition(grid);
         let period = self.period;
         let r2max = radius * radius;
+        self.listing_r2 = r2max;
         self.classes
             .par_iter_mut()
             .flatten()
@@ -138,10 +145,81 @@ impl<V: Vector> PairBlocks<V> {
         }
     }
 
-    /// `true` when the list was built for as many points as `points` holds and none of them
-    /// has moved more than `drift` (minimum image across periodic axes) since.
-    pub fn holds(&self, points: &[V], drift: f64) -> bool {
-        largest_drift(&self.origin, points, &self.period).is_some_and(|d2| d2 <= drift * drift)
+    /// Collects into `moved`, in index order, the points that have moved more than
+    /// `half_skin` since the build (minimum image across periodic axes). Returns `false` when
+    /// the list was built for another number of points or one of them has moved more than
+    /// `limit`.
+    pub fn moved_points(
+        &self,
+        points: &[V],
+        half_skin: f64,
+        limit: f64,
+        moved: &mut Vec<u32>,
+    ) -> bool {
+        moved.clear();
+        if points.len() != self.origin.len() {
+            return false;
+        }
+        let periodic = self.period.any();
+        let drift2 = |(&p, &o): (&V, &V)| {
+            let d = p - o;
+            let d = if periodic {
+                self.period.minimum_image(d)
+            } else {
+                d
+            };
+            d.length_squared()
+        };
+        let (half2, limit2) = (half_skin * half_skin, limit * limit);
+        let far: Vec<(u32, f64)> = points
+            .par_iter()
+            .zip(self.origin.par_iter())
+            .with_min_len(4096)
+            .enumerate()
+            .filter_map(|(i, pair)| {
+                let d2 = drift2(pair);
+                (d2 > half2).then_some((i as u32, d2))
+            })
+            .collect();
+        moved.extend(far.iter().map(|&(i, _)| i));
+        far.iter().all(|&(_, d2)| d2 <= limit2)
+    }
+
+    /// `true` when one of the `moved` points lies within `radius` of a point that the list
+    /// does not pair it with (the two were not within the listing radius at the build), the
+    /// pairs of two points at or past `owned` aside. `grid` indexes `points`, the current
+    /// positions, in cells at least `radius` wide. Borderline distances (within 1e-9 of the
+    /// radii, relative) count as lacking, so rounding never hides a pair.
+    pub fn lacks_pair(&self, grid: &CellGrid<V>, points: &[V], moved: &[u32], radius: f64) -> bool {
+        let near2 = radius * radius * (1.0 + BORDER);
+        let listed2 = self.listing_r2 * (1.0 - BORDER);
+        let owned = self.owned;
+        let image = |d: V| self.period.minimum_image(d);
+        moved.par_iter().any(|&i| {
+            let i = i as usize;
+            let (x, x0) = (points[i], self.origin[i]);
+            let mut lacks = false;
+            grid.for_each_candidate_within_shifted(x, radius, |j, _| {
+                lacks |= j != i
+                    && (i < owned || j < owned)
+                    && image(points[j] - x).length_squared() < near2
+                    && image(self.origin[j] - x0).length_squared() >= listed2;
+            });
+            lacks
+        })
+    }
+
+    /// Keeps the pairs of the points `kept` (old indices, increasing), renumbered `0..` in
+    /// that order, of which the first `owned` are own: the list of the remaining points,
+    /// each pair where it was, as a build at their positions of the build would list them.
+    pub fn retain(&mut self, kept: &[u32], owned: usize) {
+        let renumbered = renumbering(kept, self.origin.len());
+        self.origin = kept.iter().map(|&i| self.origin[i as usize]).collect();
+        self.owned = owned;
+        self.classes
+            .par_iter_mut()
+            .flatten()
+            .for_each(|chunk| chunk.retain(&renumbered));
     }
 
     /// The points as they were at the build.
@@ -368,7 +446,48 @@ struct SharedValues<T> {
 // documentation), and classes are swept one after the other.
 unsafe impl<T: Send> Sync for SharedValues<T> {}
 
+/// `renumbered[old] = new` for the points `kept` (old indices, increasing) of `len`, and
+/// [`GONE`] for the others.
+pub(super) fn renumbering(kept: &[u32], len: usize) -> Vec<u32> {
+    let mut renumbered = vec![GONE; len];
+    for (new, &old) in kept.iter().enumerate() {
+        renumbered[old as usize] = new as u32;
+    }
+    renumbered
+}
+
+/// The new index of a point that is not kept.
+pub(super) const GONE: u32 = u32::MAX;
+
 impl BlockChunk {
+    /// Drops the rows and partners that `renumbered` maps to [`GONE`] and renumbers the
+    /// rest, in place and in order.
+    fn retain(&mut self, renumbered: &[u32]) {
+        let (mut rows, mut pairs) = (0, 0);
+        for r in 0..self.first.len() {
+            let first = renumbered[self.first[r] as usize];
+            let (s, e) = (self.start[r] as usize, self.start[r + 1] as usize);
+            if first == GONE {
+                continue;
+            }
+            let row_start = pairs;
+            for k in s..e {
+                let j = renumbered[self.second[k] as usize];
+                self.second[pairs] = j;
+                pairs += usize::from(j != GONE);
+            }
+            if pairs > row_start {
+                self.first[rows] = first;
+                self.start[rows] = row_start as u32;
+                rows += 1;
+            }
+        }
+        self.first.truncate(rows);
+        self.start.truncate(rows);
+        self.start.push(pairs as u32);
+        self.second.truncate(pairs);
+    }
+
     /// Lists the rows of the chunk's blocks: for each particle of a block, its partners within
     /// `sqrt(r2max)` of the block, in the block's order, the pairs of two points at or past
     /// `owned` left out.
@@ -494,7 +613,9 @@ mod tests {
         grid.rebuild_keyed(built, keys);
         let mut list = PairBlocks::default();
         list.rebuild(&grid, built, owned, reach);
-        assert!(list.holds(at, 0.1 * radius));
+        let mut moved = vec![0];
+        assert!(list.moved_points(at, 0.1 * radius, 0.1 * radius, &mut moved));
+        assert!(moved.is_empty());
         let mut order = vec![Vec::new(); at.len()];
         list.sweep(at, radius, &mut order, |i, run, index, r_ij, r2| {
             for (k, &j) in index.iter().enumerate() {
@@ -599,8 +720,78 @@ mod tests {
         let mut d = V::ZERO;
         d.set(0, 0.101 * radius);
         far[n / 2] = period.wrap(far[n / 2] + d);
-        assert!(!list.holds(&far, 0.1 * radius));
-        assert!(!list.holds(&points[1..], 0.1 * radius));
+        let mut moved = Vec::new();
+        assert!(!list.moved_points(&far, 0.1 * radius, 0.1 * radius, &mut moved));
+        assert!(list.moved_points(&far, 0.1 * radius, 0.2 * radius, &mut moved));
+        assert_eq!(moved, [n as u32 / 2]);
+        assert!(!list.moved_points(&points[1..], 0.1 * radius, radius, &mut moved));
+    }
+
+    /// After some points have moved past half the skin, the list lacks a pair exactly when a
+    /// moved point has come within the radius of a point it was not listed with; when it
+    /// lacks none, a sweep meets every pair within the radius.
+    fn check_lacking<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let n = points.len();
+        let points: Vec<V> = points.into_iter().map(|p| period.wrap(p)).collect();
+        let listing = 1.2 * radius;
+        let mut grid = CellGrid::with_period(listing, period).unwrap();
+        grid.rebuild(&points);
+        let mut list = PairBlocks::default();
+        list.rebuild(&grid, &points, n, listing);
+        let noise: Vec<f64> = pseudo_random(3 * n, 5).collect();
+        let (mut lacking, mut complete) = (0, 0);
+        for step in 1..=12 {
+            // Every 7th point moves step * 0.05 radii; the others a quarter of the skin.
+            let at: Vec<V> = (0..n)
+                .map(|i| {
+                    let mut d = V::ZERO;
+                    for k in 0..V::DIM {
+                        d.set(k, noise[3 * i + k] - 0.5);
+                    }
+                    let far = if i % 7 == 0 { step as f64 * 0.05 } else { 0.05 };
+                    period.wrap(points[i] + d * (far * radius / d.length().max(1e-300)))
+                })
+                .collect();
+            let mut moved = Vec::new();
+            assert!(list.moved_points(&at, 0.1 * radius, radius, &mut moved));
+            assert!(moved.iter().all(|&i| i % 7 == 0));
+            let mut now = CellGrid::with_period(listing, period).unwrap();
+            now.rebuild(&at);
+            let distance2 =
+                |v: &[V], i: usize, j: usize| period.minimum_image(v[j] - v[i]).length_squared();
+            let truth = moved.iter().any(|&i| {
+                let i = i as usize;
+                (0..n).any(|j| {
+                    j != i
+                        && distance2(&at, i, j) < radius * radius
+                        && distance2(&points, i, j) >= listing * listing
+                })
+            });
+            let lacks = list.lacks_pair(&now, &at, &moved, radius);
+            assert_eq!(lacks, truth, "moves of {step} x 0.05 radii");
+            if lacks {
+                lacking += 1;
+                continue;
+            }
+            complete += 1;
+            let mut met = vec![0usize; n];
+            list.sweep(&at, radius, &mut met, |_, run, index, _, _| {
+                *run.first() += index.len();
+                for k in 0..index.len() {
+                    *run.partner(k) += 1;
+                }
+            });
+            for (i, &count) in met.iter().enumerate() {
+                let brute = (0..n)
+                    .filter(|&j| j != i && distance2(&at, i, j) < radius * radius)
+                    .count();
+                assert_eq!(count, brute, "partners of point {i}");
+            }
+        }
+        assert!(
+            lacking > 0 && complete > 0,
+            "{lacking} lacking, {complete} complete"
+        );
     }
 
     #[test]
@@ -610,5 +801,66 @@ mod tests {
         check(p2, 0.07, period2);
         check(p3.clone(), 0.13, Periodicity::none());
         check(p3, 0.13, period3);
+    }
+
+    /// A list that drops some points meets the others' pairs in the order of a list built
+    /// over those alone, own and halo points alike.
+    fn check_retained<V: Vector>(points: Vec<V>, radius: f64, period: Periodicity<V>) {
+        let n = points.len();
+        let points: Vec<V> = points.into_iter().map(|p| period.wrap(p)).collect();
+        let keys: Vec<u32> = (0..n as u32)
+            .map(|k| k.wrapping_mul(2654435761) >> 4)
+            .collect();
+        let owned = n - n / 4;
+        let order = |points: &[V], keys: &[u32], owned: usize, list: Option<PairBlocks<V>>| {
+            let list = list.unwrap_or_else(|| {
+                let mut grid = CellGrid::with_period(radius, period).unwrap();
+                grid.rebuild_keyed(points, keys);
+                let mut list = PairBlocks::default();
+                list.rebuild(&grid, points, owned, radius);
+                list
+            });
+            let mut met = vec![Vec::new(); points.len()];
+            list.sweep(points, radius, &mut met, |i, run, index, _, _| {
+                for (k, &j) in index.iter().enumerate() {
+                    run.first().push(keys[j as usize]);
+                    run.partner(k).push(keys[i]);
+                }
+            });
+            met
+        };
+        let mut grid = CellGrid::with_period(radius, period).unwrap();
+        grid.rebuild_keyed(&points, &keys);
+        let mut list = PairBlocks::default();
+        list.rebuild(&grid, &points, owned, radius);
+        let kept: Vec<u32> = (0..n as u32).filter(|i| i % 5 != 2).collect();
+        let kept_owned = kept.iter().filter(|&&i| (i as usize) < owned).count();
+        list.retain(&kept, kept_owned);
+        let pick = |v: &[u32]| kept.iter().map(|&i| v[i as usize]).collect::<Vec<u32>>();
+        let remaining: Vec<V> = kept.iter().map(|&i| points[i as usize]).collect();
+        assert_eq!(list.origin(), &remaining[..]);
+        let kept_keys = pick(&keys);
+        assert_eq!(
+            order(&remaining, &kept_keys, kept_owned, Some(list)),
+            order(&remaining, &kept_keys, kept_owned, None)
+        );
+    }
+
+    #[test]
+    fn a_list_without_removed_points_meets_the_pairs_of_one_built_without_them() {
+        let (p2, period2, p3, period3) = point_clouds(13);
+        check_retained(p2.clone(), 0.07, Periodicity::none());
+        check_retained(p2, 0.07, period2);
+        check_retained(p3.clone(), 0.13, Periodicity::none());
+        check_retained(p3, 0.13, period3);
+    }
+
+    #[test]
+    fn a_kept_list_lacks_a_pair_exactly_when_a_moved_point_met_an_unlisted_one() {
+        let (p2, period2, p3, period3) = point_clouds(7);
+        check_lacking(p2.clone(), 0.07, Periodicity::none());
+        check_lacking(p2, 0.07, period2);
+        check_lacking(p3.clone(), 0.13, Periodicity::none());
+        check_lacking(p3, 0.13, period3);
     }
 }

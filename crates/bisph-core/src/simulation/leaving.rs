@@ -5,7 +5,7 @@
 
 use super::part_state::Fault;
 use super::Simulation;
-use crate::decomposition::ExactSum;
+use crate::decomposition::{all_gather, ExactSum};
 use crate::dim::Vector;
 use crate::energy::particle_energy;
 
@@ -29,11 +29,11 @@ impl<V: Vector> Simulation<V> {
     /// Removes the own particles `own` (distinct indices below [`Simulation::owned_len`])
     /// when the run may still lose them all, over every part ([`SimConfig::max_removed`]).
     /// Their energy, `sum m (|u|^2 / 2 + e(rho) - g . r)` summed exactly over the parts, goes
-    /// to [`Simulation::removed_energy`], so the energy total still closes; the neighbour
-    /// list is dropped, so the next step rebuilds the grid and the list (and a split run hands
-    /// its particles over and selects its halos again, which drops the halo copies of the
-    /// removed particles). Every part must call it, with its own particles (none, for some).
-    /// Returns whether particles were removed; `false` changes nothing.
+    /// to [`Simulation::removed_energy`], so the energy total still closes. The neighbour
+    /// lists keep the pairs of the remaining particles ([`Simulation::keep_lists_of`]), and
+    /// the parts of a split run drop their halo copies of the removed particles. Every part
+    /// must call it, with its own particles (none, for some). Returns whether particles were
+    /// removed; `false` changes nothing.
     ///
     /// [`SimConfig::max_removed`]: super::SimConfig::max_removed
     pub fn remove_own(&mut self, own: &[usize]) -> bool {
@@ -47,19 +47,48 @@ impl<V: Vector> Simulation<V> {
         energy.add_all(own.iter().map(|&i| particle_energy(f, i, eos, gravity)));
         let mut energy = [energy];
         self.sum_over_parts(&mut energy);
+        let gone = self.gone_with(own);
+        let kept: Vec<u32> = (0..gone.len() as u32)
+            .filter(|&i| !gone[i as usize])
+            .collect();
+        let owned = self.owned_len() - own.len();
+        self.fluid.permute(&kept, &mut self.scratch.permute);
+        if let Some(part) = &mut self.part {
+            part.owned = owned;
+            // The own particles each part still receives, in the order it stores them.
+            let mut renumbered = vec![u32::MAX; gone.len()];
+            for (new, &old) in kept.iter().enumerate() {
+                renumbered[old as usize] = new as u32;
+            }
+            for indices in &mut part.send {
+                indices.retain_mut(|i| {
+                    *i = renumbered[*i as usize];
+                    *i != u32::MAX
+                });
+            }
+        }
+        self.removed += count;
+        self.removed_energy += energy[0].value();
+        self.keep_lists_of(&kept, gone.len(), owned);
+        true
+    }
+
+    /// Which of this part's particles go with the own particles `own`: those, and in a split
+    /// run the halo copies of the particles every other part removes. Every part must call it.
+    fn gone_with(&self, own: &[usize]) -> Vec<bool> {
+        let f = &self.fluid;
         let mut gone = vec![false; f.len()];
         for &i in own {
             gone[i] = true;
         }
-        let kept: Vec<u32> = (0..f.len() as u32).filter(|&i| !gone[i as usize]).collect();
-        self.fluid.permute(&kept, &mut self.scratch.permute);
-        if let Some(part) = &mut self.part {
-            part.owned -= own.len();
+        if let Some(part) = &self.part {
+            let ids = own.iter().map(|&i| u64::from(f.id[i])).collect();
+            let mut removed: Vec<u64> = all_gather(&part.transport, ids).concat();
+            removed.sort_unstable();
+            for (i, flag) in gone.iter_mut().enumerate().skip(part.owned) {
+                *flag = removed.binary_search(&u64::from(f.id[i])).is_ok();
+            }
         }
-        self.removed += count;
-        self.removed_energy += energy[0].value();
-        self.scratch.candidates_valid = false;
-        self.wall_clearance.forget();
-        true
+        gone
     }
 }

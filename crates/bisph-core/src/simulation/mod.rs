@@ -3,6 +3,7 @@
 //! of paper 1 ([`midpoint`]). Physics turns a state into rates; integrators only combine them.
 
 mod anderson;
+mod kept_lists;
 mod leaving;
 mod midpoint;
 mod part;
@@ -60,7 +61,8 @@ pub enum DiffusionChoice {
     },
 }
 
-/// Wall-clock seconds spent in each phase of the time loop (summed over steps).
+/// Wall-clock seconds spent in each phase of the time loop (summed over steps), and how
+/// often the Verlet list was built.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PhaseTimes {
     /// Neighbour search: cell grid rebuilds, reordering included.
@@ -75,6 +77,11 @@ pub struct PhaseTimes {
     pub wall_pressure: f64,
     /// Whole steps (so integration = steps - neighbours - rates).
     pub steps: f64,
+    /// Verlet list builds.
+    pub list_builds: u64,
+    /// Steps that kept the Verlet lists with some particles moved past half the skin
+    /// ([`Simulation::lists_hold`]).
+    pub lists_kept_moved: u64,
 }
 
 /// Time integrator.
@@ -122,8 +129,9 @@ pub struct SimConfig<V: Vector> {
     pub reorder_interval: u64,
     /// Skin of the neighbour list kept across steps, as a fraction of the kernel support
     /// (0 = search the cell grid at every step): the pairs within `support (1 + skin)` are
-    /// listed, each once, and kept until a particle has moved half the skin
-    /// ([`crate::neighbours::PairBlocks`]); the particles are reordered only when it is
+    /// listed, each once, and kept until a particle has moved half the skin, or longer while
+    /// few have and none has met a partner the list lacks ([`Simulation::lists_hold`],
+    /// [`crate::neighbours::PairBlocks`]); the particles are reordered only when it is
     /// rebuilt. The explicit scheme sweeps the pairs; the midpoint scheme lists them with
     /// their kernel gradients for a step. Not used when the list would exceed
     /// [`CANDIDATE_LIST_BUDGET`].
@@ -175,8 +183,14 @@ struct Scratch<V> {
     element_particles: PairList<V>,
     wall_pairs_listed: bool,
     /// The Verlet list (see [`SimConfig::neighbour_skin`]), valid while `candidates_valid`
-    /// and no particle moved more than `skin / 2` since its build.
+    /// and [`Simulation::lists_hold`].
     candidates: PairBlocks<V>,
+    /// The particles that have moved more than half the skin since the list's build.
+    moved: Vec<u32>,
+    /// Some particle of the run (on any part) has.
+    moved_anywhere: bool,
+    /// The cell grid indexes the positions of the list's build (else the current ones).
+    grid_at_build: bool,
     /// The fluid sums of a sweep over the Verlet list's pairs.
     pair_sums: Vec<FluidSums<V>>,
     candidates_valid: bool,
@@ -724,12 +738,10 @@ impl<V: Vector> Simulation<V> {
     }
 
     /// The neighbour data of a step at the current positions: with a skin
-    /// ([`SimConfig::neighbour_skin`]), the Verlet list is kept while it holds (no particle
-    /// moved more than half the skin; the cell grid is then kept too, its cells being the
-    /// listing radius wide, or rebuilt without reordering across periodic axes, where
-    /// particles wrap), else the grid is rebuilt (the particles reordered when
-    /// `reorder_interval` > 0) and the list with it. Without a skin, the grid is rebuilt
-    /// (reordered every `reorder_interval` steps).
+    /// ([`SimConfig::neighbour_skin`]), the Verlet list is kept while it holds
+    /// ([`Simulation::lists_hold`], which places the cell grid), else the grid is rebuilt
+    /// (the particles reordered when `reorder_interval` > 0) and the list with it. Without a
+    /// skin, the grid is rebuilt (reordered every `reorder_interval` steps).
     pub(crate) fn step_neighbours(&mut self) {
         let interval = self.config.reorder_interval;
         let skin = self.scratch.skin;
@@ -739,14 +751,10 @@ impl<V: Vector> Simulation<V> {
             return;
         }
         let start = Instant::now();
-        let s = &self.scratch;
-        let holds = s.candidates_valid && s.candidates.holds(&self.fluid.position, 0.5 * skin);
+        let holds = self.lists_hold();
         if self.on_all_parts(holds) {
-            if self.config.periodicity.any() {
-                self.fluid_grid
-                    .rebuild_keyed(&self.fluid.position, &self.fluid.id);
-            }
             self.scratch.use_candidates = true;
+            self.timings.lists_kept_moved += u64::from(self.scratch.moved_anywhere);
             self.timings.neighbours += start.elapsed().as_secs_f64();
             return;
         }
@@ -759,7 +767,9 @@ impl<V: Vector> Simulation<V> {
             .candidates
             .rebuild(&self.fluid_grid, &self.fluid.position, queries, radius);
         self.scratch.candidates_valid = true;
+        self.scratch.grid_at_build = true;
         self.scratch.use_candidates = true;
+        self.timings.list_builds += 1;
         self.list_wall_candidates(None);
         self.wall_clearance
             .measure(&self.walls, &self.fluid.position, 0.5 * skin);
@@ -842,21 +852,23 @@ impl<V: Vector> Simulation<V> {
 
     /// Rebuilds the Verlet list from the positions `origin` it was built at (see
     /// [`Simulation::neighbour_list_origin`]; the particles in the order they had then, which
-    /// is kept until the next build), and the cell grid as the run had it: over `origin`, or
-    /// over the current positions where an axis is periodic (that grid is rebuilt each step).
-    /// Returns whether the list was restored: with `None`, without a skin, or when `origin`
-    /// does not fit the particles (another length, not finite, or a particle farther than half
-    /// the skin from it, so the list could miss pairs), the list is dropped instead (the next
-    /// step builds one) and the grid is built over the current positions.
+    /// is kept until the next build), checked at the current positions by the run that saved
+    /// it, and the cell grid: over `origin`, or over the current positions where an axis is
+    /// periodic or a particle has moved past half the skin (the next step places it as the run
+    /// did, [`Simulation::lists_hold`]). Returns whether the list was restored: with `None`,
+    /// without a skin, or when `origin` does not fit the particles (another length, not
+    /// finite, or a particle farther than the drift limit from it, so the list could miss
+    /// pairs), the list is dropped instead (the next step builds one) and the grid is built
+    /// over the current positions.
     pub fn restore_neighbour_list(&mut self, origin: Option<&[V]>) -> bool {
         let skin = self.scratch.skin;
         let period = self.config.periodicity;
         let position = &self.fluid.position;
+        let limit = self.drift_limit();
         let fits = |origin: &[V]| {
             origin.len() == position.len()
                 && origin.iter().zip(position).all(|(&o, &p)| {
-                    o.is_finite()
-                        && period.minimum_image(p - o).length_squared() <= 0.25 * skin * skin
+                    o.is_finite() && period.minimum_image(p - o).length_squared() <= limit * limit
                 })
         };
         let Some(origin) = origin.filter(|o| skin > 0.0 && fits(o)) else {
@@ -873,11 +885,21 @@ impl<V: Vector> Simulation<V> {
             .candidates
             .rebuild(&self.fluid_grid, origin, queries, radius);
         self.scratch.candidates_valid = true;
+        self.scratch.grid_at_build = true;
         self.list_wall_candidates(Some(origin));
         self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
-        if period.any() {
+        // The run had checked the list at these positions; the particles that have moved past
+        // half the skin since the build have no wall-distance bounds, and the grid is over
+        // the current positions where they are (the next step places it as the run did).
+        let s = &mut self.scratch;
+        s.use_candidates = true;
+        s.candidates
+            .moved_points(&self.fluid.position, 0.5 * skin, limit, &mut s.moved);
+        self.wall_clearance.forget_points(&self.scratch.moved);
+        if period.any() || !self.scratch.moved.is_empty() {
             self.fluid_grid
                 .rebuild_keyed(&self.fluid.position, &self.fluid.id);
+            self.scratch.grid_at_build = false;
         }
         true
     }
@@ -895,7 +917,8 @@ impl<V: Vector> Simulation<V> {
         let owned = self.owned_len();
         let position = &self.fluid.position;
         let s = &mut self.scratch;
-        if !(s.skin > 0.0 && s.candidates_valid && s.candidates.holds(position, 0.5 * s.skin)) {
+        // The list was checked at these positions by the step's neighbour search.
+        if !(s.skin > 0.0 && s.candidates_valid && s.use_candidates) {
             // The own particles' pairs: the halo takes its rates from the owners.
             s.candidates_valid = false;
             s.candidates

@@ -328,19 +328,20 @@ impl<V: Vector> Simulation<V> {
 
     /// Marks the wall elements whose pressure this part needs
     /// ([`crate::walls::BoundaryElements::in_reach`]): those within a kernel support, an
-    /// element's reach and the skin of its region, where its own particles are. Across
+    /// element's reach and two drift limits of its region, where its own particles are. Across
     /// periodic axes every element is kept. Nothing to do for a whole simulation.
     pub(crate) fn mark_elements_in_reach(&mut self) {
         let Some(part) = &self.part else {
             return;
         };
+        let drift_limit = self.drift_limit();
         let e = &mut self.walls.elements;
         if self.config.periodicity.any() {
             e.in_reach.clear();
             return;
         }
         let region = part.decomposition.regions()[part.transport.rank()];
-        let reach = self.config.kernel.support + e.max_reach + self.scratch.skin;
+        let reach = self.config.kernel.support + e.max_reach + 2.0 * drift_limit;
         let (centres, in_reach) = (&e.centre, &mut e.in_reach);
         in_reach.clear();
         in_reach.extend(
@@ -446,7 +447,7 @@ impl<V: Vector> Simulation<V> {
 
     /// Moves the particles that left this part's region to their owners, stores the own
     /// particles in the cell grid's order when `sort`, and selects the halo again (the
-    /// particles of other parts within the reach and the skin of the region). Nothing to do
+    /// particles of other parts within the reach and two drift limits of the region). Nothing to do
     /// for a whole simulation.
     pub(crate) fn repartition(&mut self, sort: bool) {
         self.rebalance();
@@ -485,12 +486,14 @@ impl<V: Vector> Simulation<V> {
 
     /// Selects the halo of the own particles and appends it (see the module documentation).
     fn select_halo(&mut self) {
+        let drift_limit = self.drift_limit();
         let Some(part) = &mut self.part else {
             return;
         };
         let (rank, parts) = (part.transport.rank(), part.transport.parts());
         let f = &mut self.fluid;
-        let width = part.reach + self.scratch.skin;
+        // Own and halo particles may each move up to the drift limit while the lists are kept.
+        let width = part.reach + 2.0 * drift_limit;
         let period = self.config.periodicity;
         let owners = vec![rank; part.owned];
         let halos = select_halos(

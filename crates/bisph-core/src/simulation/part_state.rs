@@ -17,12 +17,16 @@ pub(crate) struct Part<V: Vector> {
     pub(super) owned: usize,
     /// For each part, the own particles it holds in its halo, in the order it stores them.
     pub(super) send: Vec<Vec<u32>>,
-    /// How far outside its region a part needs the particles, besides the skin of the
-    /// neighbour list: two kernel supports and twice the largest element reach (a particle
-    /// sums over wall points within a support, and the wall values there are sums over the
-    /// fluid within a support of an element's quadrature points). With a skin of at most a
-    /// support, this also covers a Verlet list taken over from a restored whole, whose
-    /// particles may each be half a skin from where it was built.
+    /// How far outside its region a part needs the particles, besides two drift limits of
+    /// the neighbour list (own and halo particles may each move that far while the lists
+    /// are kept, [`Simulation::drift_limit`]): two kernel supports and twice the largest
+    /// element reach (a particle sums over wall points within a support, and the wall values
+    /// there are sums over the fluid within a support of an element's quadrature points).
+    /// With a skin of at most a support, this also covers a Verlet list taken over from a
+    /// restored whole, whose particles may each be up to the drift limit from where it was
+    /// built.
+    ///
+    /// [`Simulation::drift_limit`]: super::Simulation::drift_limit
     pub(super) reach: f64,
     /// Particles this part has handed to others since it was built.
     pub(super) departed: u64,

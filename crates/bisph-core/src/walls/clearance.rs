@@ -1,6 +1,6 @@
 //! Lower bounds of the particles' distances to fixed walls, measured when the explicit
-//! scheme's Verlet list is built and valid while it holds (no particle has moved more than
-//! half the skin since). They spare the elastic bounce and the wall-crossing watch the
+//! scheme's Verlet list is built and valid while it holds, for the particles that have not
+//! moved more than half the skin since (the others lose theirs). They spare the elastic bounce and the wall-crossing watch the
 //! element search for particles that no wall can concern within a step. A particle that lies
 //! behind a wall at the measurement (water that went over the rim of an open wall) gets no
 //! bound, so the watch looks at it at every step.
@@ -63,6 +63,24 @@ impl WallClearance {
             });
         self.slack = slack;
         self.measured = !elements.is_empty();
+    }
+
+    /// Drops the bounds of the particles `moved` (they have moved farther than the slack
+    /// since the measurement): none of them is clear until the next measurement.
+    pub fn forget_points(&mut self, moved: &[u32]) {
+        for &i in moved {
+            if let Some(bound) = self.lower_bound.get_mut(i as usize) {
+                *bound = f64::NEG_INFINITY;
+            }
+        }
+    }
+
+    /// Keeps the bounds of the particles `kept` (old indices, increasing), renumbered `0..`
+    /// in that order (the others were removed).
+    pub fn retain(&mut self, kept: &[u32]) {
+        if self.measured {
+            self.lower_bound = kept.iter().map(|&i| self.lower_bound[i as usize]).collect();
+        }
     }
 
     /// Drops the bounds (the particles were reordered, or the walls may move).

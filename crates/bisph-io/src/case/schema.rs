@@ -378,7 +378,8 @@ pub struct TimeSection {
     pub integrator: IntegratorName,
     /// Skin of the explicit scheme's neighbour (Verlet) list as a fraction of the kernel
     /// support: candidates within `(1 + skin)` supports are kept across steps until a
-    /// particle has moved half the skin (0 = search the cell grid at every step; default
+    /// particle has moved half the skin, or longer while few have and none has come within
+    /// reach of a partner the list lacks (0 = search the cell grid at every step; default
     /// [`DEFAULT_NEIGHBOUR_SKIN`]).
     #[serde(default = "default_neighbour_skin")]
     pub neighbour_skin: f64,

@@ -78,6 +78,12 @@ pub struct Summary {
     pub particle_steps_per_second: f64,
     /// Where the wall seconds went.
     pub phase_seconds: PhaseSeconds,
+    /// Builds of the neighbour (Verlet) list in this invocation.
+    pub neighbour_list_builds: u64,
+    /// Steps of this invocation that kept the neighbour lists although some particles had
+    /// moved more than half the skin since their build (none had come within reach of a
+    /// partner the lists lack).
+    pub neighbour_lists_kept_past_half_skin: u64,
     /// `(E_total(end) - E_total(0)) / E_scale`, where `E_scale` is the initial kinetic and
     /// compressible energy plus the potential energy above the lowest particle.
     pub energy_drift_relative: f64,
@@ -1285,6 +1291,8 @@ impl<'a, V: CaseDim> ActiveRun<'a, V> {
             particle_steps_per_second: sim.fluid_count() as f64 * sim.step as f64
                 / wall_seconds.max(1e-9),
             phase_seconds: PhaseSeconds::new(&sim.timings, self.started.elapsed().as_secs_f64()),
+            neighbour_list_builds: sim.timings.list_builds,
+            neighbour_lists_kept_past_half_skin: sim.timings.lists_kept_moved,
             energy_drift_relative: (e_final.total - counters.e0_total) / counters.scale,
             energy_scale: counters.scale,
             energy_total_initial: counters.e0_total,
