@@ -448,7 +448,7 @@ unsafe impl<T: Send> Sync for SharedValues<T> {}
 
 /// `renumbered[old] = new` for the points `kept` (old indices, increasing) of `len`, and
 /// [`GONE`] for the others.
-pub(super) fn renumbering(kept: &[u32], len: usize) -> Vec<u32> {
+pub fn renumbering(kept: &[u32], len: usize) -> Vec<u32> {
     let mut renumbered = vec![GONE; len];
     for (new, &old) in kept.iter().enumerate() {
         renumbered[old as usize] = new as u32;
@@ -457,7 +457,7 @@ pub(super) fn renumbering(kept: &[u32], len: usize) -> Vec<u32> {
 }
 
 /// The new index of a point that is not kept.
-pub(super) const GONE: u32 = u32::MAX;
+pub const GONE: u32 = u32::MAX;
 
 impl BlockChunk {
     /// Drops the rows and partners that `renumbered` maps to [`GONE`] and renumbers the

@@ -15,6 +15,7 @@
 //! same totals.
 
 use super::Simulation;
+use crate::decomposition::ExactSum;
 use crate::dim::Vector;
 
 /// Largest share of the particles that may have moved past half the skin with the lists
@@ -45,10 +46,20 @@ impl<V: Vector> Simulation<V> {
                 .moved_points(&self.fluid.position, half, limit, &mut moved);
         let owned = self.owned_len();
         let own_moved = moved.partition_point(|&i| (i as usize) < owned);
-        let moved_total = self.total_over_parts(own_moved as f64);
-        let few = moved_total <= MOVED_SHARE * self.fluid_count() as f64;
+        // The moved particles and all particles of the run, in one exchange.
+        let mut totals = [own_moved as f64, owned as f64].map(|n| {
+            let mut sum = ExactSum::new();
+            sum.add(n);
+            sum
+        });
+        self.sum_over_parts(&mut totals);
+        let (moved_total, total) = (totals[0].value(), totals[1].value());
+        let few = moved_total <= MOVED_SHARE * total;
         self.scratch.moved_anywhere = moved_total > 0.0;
-        self.place_fluid_grid(moved_total > 0.0, within);
+        // Otherwise the step rebuilds the grid with the lists.
+        if within && few {
+            self.place_fluid_grid(moved_total > 0.0);
+        }
         let lacks = within && few && moved_total > 0.0 && self.lists_lack_pairs(&moved, own_moved);
         let holds = within && few && !lacks;
         if holds {
@@ -60,14 +71,14 @@ impl<V: Vector> Simulation<V> {
 
     /// Rebuilds the cell grid over the current positions where some particle has moved past
     /// half the skin, or along periodic axes (where particles wrap); else puts it back over
-    /// the positions of the build, if `kept` (the lists are still those of the build).
-    fn place_fluid_grid(&mut self, moved: bool, kept: bool) {
+    /// the positions of the build.
+    fn place_fluid_grid(&mut self, moved: bool) {
         let s = &mut self.scratch;
         if moved || self.config.periodicity.any() {
             self.fluid_grid
                 .rebuild_keyed(&self.fluid.position, &self.fluid.id);
             s.grid_at_build = false;
-        } else if kept && !s.grid_at_build {
+        } else if !s.grid_at_build {
             self.fluid_grid
                 .rebuild_keyed(s.candidates.origin(), &self.fluid.id);
             s.grid_at_build = true;

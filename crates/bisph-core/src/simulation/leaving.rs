@@ -8,6 +8,7 @@ use super::Simulation;
 use crate::decomposition::{all_gather, ExactSum};
 use crate::dim::Vector;
 use crate::energy::particle_energy;
+use crate::neighbours::{renumbering, GONE};
 
 impl<V: Vector> Simulation<V> {
     /// Whether `r` lies outside the domain (not between its corners in every direction).
@@ -56,14 +57,11 @@ impl<V: Vector> Simulation<V> {
         if let Some(part) = &mut self.part {
             part.owned = owned;
             // The own particles each part still receives, in the order it stores them.
-            let mut renumbered = vec![u32::MAX; gone.len()];
-            for (new, &old) in kept.iter().enumerate() {
-                renumbered[old as usize] = new as u32;
-            }
+            let renumbered = renumbering(&kept, gone.len());
             for indices in &mut part.send {
                 indices.retain_mut(|i| {
                     *i = renumbered[*i as usize];
-                    *i != u32::MAX
+                    *i != GONE
                 });
             }
         }
