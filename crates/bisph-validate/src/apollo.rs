@@ -4,7 +4,7 @@
 //! paper's setting, resumable, its loads and spurious energy against the reference code's.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
-use crate::support::{column, line, load, plot, read_columns, run, run_resumable};
+use crate::support::{column, line, load, plot, read_columns, run_resumable};
 use glam::{DQuat, DVec3};
 use std::path::{Path, PathBuf};
 
@@ -69,16 +69,12 @@ impl Landing {
     }
 }
 
-/// Runs the case with `settings` into `out` (resumable from its checkpoints when asked) and
+/// Runs the case with `settings` into `out` (resumable from its checkpoints) and
 /// reads the capsule's loads.
-fn land(out: &Path, settings: &[String], resumable: bool) -> Result<Landing, String> {
+fn land(out: &Path, settings: &[String]) -> Result<Landing, String> {
     let refs: Vec<&str> = settings.iter().map(|s| s.as_str()).collect();
     let loaded = load("apollo", include_str!("../../../cases/apollo.toml"), &refs)?;
-    let s = if resumable {
-        run_resumable(&loaded, out)?
-    } else {
-        run(&loaded, out)?
-    };
+    let s = run_resumable(&loaded, out)?;
     let (h, rows) = read_columns(&out.join("body_capsule.csv"))?;
     let get = |n: &str| column(&h, &rows, n);
     let t = get("t")?;
@@ -178,8 +174,8 @@ fn run_quick(name: &str, out: &Path) -> Result<CaseReport, String> {
         s.push(format!("body.0.free.coupling=\"{coupling}\""));
         s
     };
-    let a = land(&out.join("iterated"), &with("iterated"), false)?;
-    let b = land(&out.join("staggered"), &with("staggered"), false)?;
+    let a = land(&out.join("iterated"), &with("iterated"))?;
+    let b = land(&out.join("staggered"), &with("staggered"))?;
     let plots = load_plots(out, &[("iterated", &a), ("staggered", &b)], None)?;
     let checks = vec![
         inside_check(a.behind + b.behind),
@@ -217,7 +213,7 @@ fn run_full(name: &str, out: &Path) -> Result<CaseReport, String> {
         "time.end=0.22".into(),
         "output.vtk_interval=0".into(),
     ];
-    let a = land(out, &settings, true)?;
+    let a = land(out, &settings)?;
     let plots = load_plots(out, &[("bisph", &a)], Some(PAPER_PEAKS))?;
     let peaks = a.peaks();
     let why = "parametric capsule, not the paper's mesh";

@@ -2,7 +2,7 @@
 //! pressures P1-P4 on the box's front face and heights H1-H4 against the MARIN experiment.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
-use crate::support::{column, line, load, plot, read_columns, run, run_resumable};
+use crate::support::{column, line, load, plot, read_columns, run_resumable};
 use std::path::Path;
 
 /// The experiment file in the data folder: time, P1-P4 and H1-H4 of the MARIN experiment,
@@ -168,11 +168,7 @@ impl ValidationCase for SphericTest2 {
             include_str!("../../../cases/spheric-test2.toml"),
             settings,
         )?;
-        let s = if quick {
-            run(&loaded, out)?
-        } else {
-            run_resumable(&loaded, out)?
-        };
+        let s = run_resumable(&loaded, out)?;
         let end = s.time;
         let (h, rows) = read_columns(&out.join("probes.csv"))?;
         let t = column(&h, &rows, "t")?;

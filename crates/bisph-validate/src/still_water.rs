@@ -17,7 +17,7 @@
 //! validation, hours long, continues where a stopped invocation left it.
 
 use crate::check::{CaseReport, Check, Tolerance, ValidationCase};
-use crate::support::{build_fingerprint, written_by, BUILD_FILE};
+use crate::support::{build_fingerprint, stop_flag, stopping, written_by, BUILD_FILE};
 use bisph_core::{Simulation, Vector};
 use bisph_io::case::{build_simulation, parse_case, CaseDim};
 use bisph_io::formats::plot::line_plot_png as plot;
@@ -253,6 +253,9 @@ fn run_tank<V: CaseDim>(
     build: &str,
     pace: &Pace,
 ) -> Result<StillWaterRun, String> {
+    if stopping() {
+        return Err("not started: asked to stop".into());
+    }
     let (dx, end) = if quick { tank.quick } else { tank.full };
     let mut overrides: Vec<String> = model.overrides.iter().map(|s| s.to_string()).collect();
     overrides.push(format!("resolution.dx={dx}"));
@@ -290,6 +293,7 @@ fn run_tank<V: CaseDim>(
     if run.t.is_empty() {
         let options = RunOptions {
             checkpoint_minutes: Some(pace.save_every.as_secs_f64() / 60.0),
+            stop: stop_flag(),
             ..Default::default()
         };
         run.settling = match settle_resumable(&loaded, &mut sim, resumed, &state, &options, &mut |_| {}) {
@@ -300,6 +304,9 @@ fn run_tank<V: CaseDim>(
             Ok(None) => "no settling".into(),
             Err(e) => format!("settling stopped: {e}"),
         };
+        if stopping() {
+            return Err("interrupted while settling".into());
+        }
     }
     sample(&mut sim, &mut run, tank, end, dir, &loaded.text, pace)?;
     run.behind = sim
@@ -313,7 +320,8 @@ fn run_tank<V: CaseDim>(
 }
 
 /// Runs `sim` to `end`, recording the samples from the first one `run` lacks and the largest
-/// speed after every step, and saving the state at a sample as `pace` says.
+/// speed after every step, and saving the state at a sample as `pace` says, or to stop there
+/// when asked ([`crate::support::stop_runs_when`]).
 fn sample<V: CaseDim>(
     sim: &mut Simulation<V>,
     run: &mut StillWaterRun,
@@ -354,14 +362,16 @@ fn sample<V: CaseDim>(
             .push(sim.energy().kinetic / (mass * G * run.depth));
         run.bottom
             .push(sim.walls.elements.pressure[bottom] / (RHO * G * run.depth));
-        if saved_at.elapsed() >= pace.save_every && k < SAMPLES {
+        // Asked to stop: the state is saved at this sample, to continue from it.
+        let stop = stopping();
+        if (stop || saved_at.elapsed() >= pace.save_every) && k < SAMPLES {
             // The measurements first: a state without them is not resumed from.
             write(&dir.join(SERIES_FILE), &to_json(run))?;
             state.sim.capture(sim);
             checkpoint::write(&dir.join(STATE_FILE), &state).map_err(|e| e.to_string())?;
             saved_at = Instant::now();
         }
-        if pace.stop_after == Some(k) {
+        if stop || pace.stop_after == Some(k) {
             return Err(format!("stopped after sample {k}"));
         }
     }

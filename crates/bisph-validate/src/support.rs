@@ -3,9 +3,11 @@
 
 use bisph_io::case::{parse_case, LoadedCase};
 use bisph_io::formats::plot::{write_png, Plot, Series, Style};
-use bisph_io::run::runner::{resume_case, run_case, run_case_with, Summary};
+use bisph_io::run::runner::{resume_case, run_case_with, Summary};
 use bisph_io::run::{checkpoint, RunOptions};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
 
 /// A case file shipped in `cases/`, embedded so `bisph validate` runs from anywhere.
 pub fn load(name: &str, text: &str, overrides: &[&str]) -> Result<LoadedCase, String> {
@@ -13,9 +15,33 @@ pub fn load(name: &str, text: &str, overrides: &[&str]) -> Result<LoadedCase, St
     parse_case(&format!("cases/{name}.toml"), text, &overrides).map_err(|e| e.to_string())
 }
 
+/// The flag that stops this process's runs at their next step (set by a signal handler).
+static STOP: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+
+/// Stops every run of the validation cases at its next step once `flag` is set: a
+/// resumable run ([`run_resumable`]) then writes a checkpoint to continue from.
+pub fn stop_runs_when(flag: Arc<AtomicBool>) {
+    // A flag set before stays: the first handler installed is the one that signals.
+    let _ = STOP.set(flag);
+}
+
+/// The flag of [`stop_runs_when`], for the options of a run.
+pub(crate) fn stop_flag() -> Option<&'static AtomicBool> {
+    STOP.get().map(|flag| flag.as_ref())
+}
+
+/// Whether the runs have been asked to stop ([`stop_runs_when`]).
+pub(crate) fn stopping() -> bool {
+    stop_flag().is_some_and(|flag| flag.load(Ordering::SeqCst))
+}
+
 /// Runs a loaded case to its end, writing its outputs under `out`.
 pub fn run(loaded: &LoadedCase, out: &Path) -> Result<Summary, String> {
-    run_case(loaded, out, &mut |_| {}).map_err(|e| e.to_string())
+    let options = RunOptions {
+        stop: stop_flag(),
+        ..Default::default()
+    };
+    run_case_with(loaded, out, &options, &mut |_| {}).map_err(|e| e.to_string())
 }
 
 /// A fingerprint of the running program (its executable's bytes), so that what one build
@@ -34,13 +60,25 @@ pub fn written_by(dir: &Path, build: &str) -> bool {
     std::fs::read_to_string(dir.join(BUILD_FILE)).is_ok_and(|b| b == build)
 }
 
+/// Whether `dir`, or a folder in it, holds a checkpoint that a resumable run of the
+/// validation continues from when the same build runs the same case there again.
+pub fn holds_resumable_run(dir: &Path) -> bool {
+    (dir.join(BUILD_FILE).exists() && dir.join(checkpoint::FILE_NAME).exists())
+        || std::fs::read_dir(dir).is_ok_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.path().is_dir() && holds_resumable_run(&e.path()))
+        })
+}
+
 /// Minutes of wall clock between two checkpoints of a resumable run.
 const CHECKPOINT_MINUTES: f64 = 10.0;
 
 /// Runs a loaded case to its end under `out`, saving a checkpoint every
-/// [`CHECKPOINT_MINUTES`]: a run stopped part-way (killed, or the machine gone) continues from
-/// its last checkpoint when the same build runs the same case into `out` again, with the
-/// figures of an uninterrupted run. Anything else in `out` is cleared first.
+/// [`CHECKPOINT_MINUTES`] and when stopped ([`stop_runs_when`]): a run stopped part-way
+/// (stopped, killed, or the machine gone) continues from its last checkpoint when the same
+/// build runs the same case into `out` again, with the figures of an uninterrupted run.
+/// Anything else in `out` is cleared first.
 pub fn run_resumable(loaded: &LoadedCase, out: &Path) -> Result<Summary, String> {
     let build = build_fingerprint()?;
     let resume = written_by(out, &build)
@@ -58,6 +96,7 @@ pub fn run_resumable(loaded: &LoadedCase, out: &Path) -> Result<Summary, String>
     }
     let options = RunOptions {
         checkpoint_minutes: Some(CHECKPOINT_MINUTES),
+        stop: stop_flag(),
         resume,
         ..Default::default()
     };

@@ -9,9 +9,9 @@ use bisph_io::{load_case, resume_case, run_case_split, RunError, RunOptions};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
 use signal_hook::consts::{SIGINT, SIGTERM};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 #[derive(Parser)]
@@ -181,6 +181,22 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
     Ok(())
 }
 
+/// A flag that SIGINT and SIGTERM set, so that runs finish their step, write a checkpoint
+/// and stop (exit code 10); a second signal ends the process at once.
+fn stop_on_signal() -> Result<Arc<AtomicBool>, (u8, String)> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(
+            signal,
+            EXIT_INTERRUPTED as i32,
+            Arc::clone(&stop),
+        )
+        .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&stop)))
+        .map_err(|e| (1, format!("cannot install the signal handler: {e}")))?;
+    }
+    Ok(stop)
+}
+
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
     set_threads(args.threads.or_else(launch::threads_per_rank))?;
     let (loaded, out) = match &args.resume {
@@ -218,13 +234,7 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             ));
         }
     }
-    // SIGINT/SIGTERM: finish the step, checkpoint, exit 10. A second signal ends at once.
-    let stop = Arc::new(AtomicBool::new(false));
-    for signal in [SIGINT, SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(signal, 10, Arc::clone(&stop))
-            .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&stop)))
-            .map_err(|e| (1, format!("cannot install the signal handler: {e}")))?;
-    }
+    let stop = stop_on_signal()?;
     let options = RunOptions {
         checkpoint_steps: args.checkpoint_steps,
         checkpoint_minutes: args.checkpoint_minutes,
@@ -454,6 +464,8 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
     std::fs::create_dir_all(&out)
         .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
+    let stop = stop_on_signal()?;
+    bisph_validate::support::stop_runs_when(Arc::clone(&stop));
     // The cases run side by side: most are small, and share the cores better case by case
     // than step by step. Each case's figures do not depend on the thread count; the reports
     // keep the registry's order.
@@ -470,6 +482,9 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             (run, started.elapsed().as_secs_f64())
         })
         .collect();
+    if stop.load(Ordering::SeqCst) {
+        return Err((EXIT_INTERRUPTED, interrupted_validation(&selected, &out)));
+    }
     let mut reports = Vec::new();
     let mut failed = Vec::new();
     for (case, (run, seconds)) in selected.iter().zip(runs) {
@@ -508,6 +523,25 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
             format!("out of tolerance or failed: {}", failed.join(", ")),
         ))
     }
+}
+
+/// What an interrupted `bisph validate` says: which cases continue from a checkpoint when
+/// the same command runs again (the others run again from the start).
+fn interrupted_validation(cases: &[&dyn bisph_validate::ValidationCase], out: &Path) -> String {
+    let resumable: Vec<&str> = cases
+        .iter()
+        .map(|c| c.name())
+        .filter(|name| bisph_validate::support::holds_resumable_run(&out.join(name)))
+        .collect();
+    let mut text = String::from("interrupted: no report written");
+    if !resumable.is_empty() {
+        text.push_str(&format!(
+            "; {} saved a checkpoint under {} and continues from it when the same command runs again",
+            resumable.join(", "),
+            out.display()
+        ));
+    }
+    text
 }
 
 /// Reads the experiment data of every selected case before any of them runs: exit code 1

@@ -540,6 +540,59 @@ fn runs_stopped_while_settling_resume_bit_identically() {
     assert_eq!(report(&reference), report(&dir));
 }
 
+/// SIGTERM stops `bisph validate` (exit code 10, no report) with a checkpoint of the running
+/// case, and the same command continues from it to the figures of an uninterrupted run.
+#[test]
+fn an_interrupted_validation_continues_from_its_checkpoint() {
+    let validate = |out: &Path| {
+        let mut command = exe();
+        command.args(["validate", "--quick", "spheric-test2", "--out"]);
+        command.arg(out);
+        command
+    };
+    let reference = temp_dir("validate-reference");
+    let done = validate(&reference).output().unwrap();
+    assert!(done.status.success(), "{done:?}");
+    let dir = temp_dir("validate-term");
+    let child = validate(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let probes = dir.join("spheric-test2").join("probes.csv");
+    let start = Instant::now();
+    while lines(&probes) < 20 && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    terminate(&child);
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(10), "{stderr}");
+    assert!(
+        stderr.contains("interrupted: no report written; spheric-test2 saved a checkpoint"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("error"), "{stderr}");
+    assert!(!dir.join("report.md").exists());
+    let resumed = validate(&dir).output().unwrap();
+    assert!(resumed.status.success(), "{resumed:?}");
+    let summary = std::fs::read_to_string(dir.join("spheric-test2").join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    assert!(summary["resumed_from_step"].as_u64().is_some(), "{summary}");
+    // The report's figures (its table rows; the headers hold wall-clock times).
+    let rows = |dir: &Path| -> Vec<String> {
+        std::fs::read_to_string(dir.join("report.md"))
+            .unwrap()
+            .lines()
+            .filter(|l| l.starts_with('|'))
+            .map(String::from)
+            .collect()
+    };
+    let expected = rows(&reference);
+    assert!(expected.len() > 2, "{expected:?}");
+    assert_eq!(rows(&dir), expected);
+}
+
 /// Sends SIGTERM to `child`.
 fn terminate(child: &Child) {
     let status = Command::new("kill")
