@@ -4,14 +4,14 @@ mod bench;
 mod estimates;
 mod launch;
 mod progress;
+mod signals;
 
 use bisph_io::{load_case, resume_case, run_case_split, RunError, RunOptions};
 use clap::{Parser, Subcommand};
 use indicatif::ProgressBar;
-use signal_hook::consts::{SIGINT, SIGTERM};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 #[derive(Parser)]
@@ -181,22 +181,6 @@ pub(crate) fn set_threads(threads: Option<usize>) -> Result<(), (u8, String)> {
     Ok(())
 }
 
-/// A flag that SIGINT and SIGTERM set, so that runs finish their step, write a checkpoint
-/// and stop (exit code 10); a second signal ends the process at once.
-fn stop_on_signal() -> Result<Arc<AtomicBool>, (u8, String)> {
-    let stop = Arc::new(AtomicBool::new(false));
-    for signal in [SIGINT, SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(
-            signal,
-            EXIT_INTERRUPTED as i32,
-            Arc::clone(&stop),
-        )
-        .and_then(|_| signal_hook::flag::register(signal, Arc::clone(&stop)))
-        .map_err(|e| (1, format!("cannot install the signal handler: {e}")))?;
-    }
-    Ok(stop)
-}
-
 fn run(args: RunArgs) -> Result<(), (u8, String)> {
     set_threads(args.threads.or_else(launch::threads_per_rank))?;
     let (loaded, out) = match &args.resume {
@@ -234,7 +218,7 @@ fn run(args: RunArgs) -> Result<(), (u8, String)> {
             ));
         }
     }
-    let stop = stop_on_signal()?;
+    let stop = signals::stop_on_signal().map_err(|e| (1, e))?;
     let options = RunOptions {
         checkpoint_steps: args.checkpoint_steps,
         checkpoint_minutes: args.checkpoint_minutes,
@@ -464,7 +448,7 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     let out = args.out.unwrap_or_else(|| PathBuf::from("out/validate"));
     std::fs::create_dir_all(&out)
         .map_err(|e| (1, format!("cannot create {}: {e}", out.display())))?;
-    let stop = stop_on_signal()?;
+    let stop = signals::stop_on_signal().map_err(|e| (1, e))?;
     bisph_validate::support::stop_runs_when(Arc::clone(&stop));
     // The cases run side by side: most are small, and share the cores better case by case
     // than step by step. Each case's figures do not depend on the thread count; the reports
