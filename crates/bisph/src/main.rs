@@ -456,6 +456,9 @@ fn validate(args: ValidateArgs) -> Result<(), (u8, String)> {
     let runs: Vec<(Result<CaseReport, String>, f64)> = selected
         .par_iter()
         .map(|case| {
+            if stop.load(Ordering::SeqCst) {
+                return (Err("not started: asked to stop".into()), 0.0);
+            }
             eprintln!(
                 "validating {} ({})",
                 case.name(),
