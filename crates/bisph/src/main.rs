@@ -126,7 +126,8 @@ const EXIT_INTERRUPTED: u8 = 10;
 
 /// Exit codes: 0 success, 1 bad input, 2 command-line usage error, 3 validation out of
 /// tolerance, 4 I/O error, 5 checkpoint refused, 6 not enough memory, 10 interrupted
-/// (checkpoint written), 20-26 a divergence watch tripped (docs/outputs-and-errors.md).
+/// (checkpoint written), 20-26 a divergence watch tripped, 130/143 a second stop signal
+/// ([`signals`]; docs/outputs-and-errors.md).
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = unsplit_in_one_process(&cli.command).and_then(|()| match cli.command {
