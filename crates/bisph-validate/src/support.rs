@@ -61,13 +61,17 @@ pub fn written_by(dir: &Path, build: &str) -> bool {
 }
 
 /// Whether `dir`, or a folder in it, holds a checkpoint that a resumable run of the
-/// validation continues from when the same build runs the same case there again.
+/// validation continues from when this build runs the same case there again.
 pub fn holds_resumable_run(dir: &Path) -> bool {
-    (dir.join(BUILD_FILE).exists() && dir.join(checkpoint::FILE_NAME).exists())
+    build_fingerprint().is_ok_and(|build| holds_run_of(dir, &build))
+}
+
+fn holds_run_of(dir: &Path, build: &str) -> bool {
+    (written_by(dir, build) && dir.join(checkpoint::FILE_NAME).exists())
         || std::fs::read_dir(dir).is_ok_and(|entries| {
             entries
                 .flatten()
-                .any(|e| e.path().is_dir() && holds_resumable_run(&e.path()))
+                .any(|e| e.path().is_dir() && holds_run_of(&e.path(), build))
         })
 }
 

@@ -812,14 +812,15 @@ mod tests {
             .map(|k| k.wrapping_mul(2654435761) >> 4)
             .collect();
         let owned = n - n / 4;
+        let build = |points: &[V], keys: &[u32], owned: usize| {
+            let mut grid = CellGrid::with_period(radius, period).unwrap();
+            grid.rebuild_keyed(points, keys);
+            let mut list = PairBlocks::default();
+            list.rebuild(&grid, points, owned, radius);
+            list
+        };
         let order = |points: &[V], keys: &[u32], owned: usize, list: Option<PairBlocks<V>>| {
-            let list = list.unwrap_or_else(|| {
-                let mut grid = CellGrid::with_period(radius, period).unwrap();
-                grid.rebuild_keyed(points, keys);
-                let mut list = PairBlocks::default();
-                list.rebuild(&grid, points, owned, radius);
-                list
-            });
+            let list = list.unwrap_or_else(|| build(points, keys, owned));
             let mut met = vec![Vec::new(); points.len()];
             list.sweep(points, radius, &mut met, |i, run, index, _, _| {
                 for (k, &j) in index.iter().enumerate() {
@@ -829,10 +830,7 @@ mod tests {
             });
             met
         };
-        let mut grid = CellGrid::with_period(radius, period).unwrap();
-        grid.rebuild_keyed(&points, &keys);
-        let mut list = PairBlocks::default();
-        list.rebuild(&grid, &points, owned, radius);
+        let mut list = build(&points, &keys, owned);
         let kept: Vec<u32> = (0..n as u32).filter(|i| i % 5 != 2).collect();
         let kept_owned = kept.iter().filter(|&&i| (i as usize) < owned).count();
         list.retain(&kept, kept_owned);
