@@ -202,7 +202,7 @@ impl<V: Vector> Simulation<V> {
         self.step += 1;
         self.last_dt = dt;
         self.check_state()?;
-        self.walls.move_to(self.time);
+        self.move_walls();
         self.step_neighbours();
         self.place_geometric_gamma();
         self.refresh_pressure();

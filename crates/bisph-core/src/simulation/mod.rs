@@ -278,8 +278,8 @@ pub struct Simulation<V: Vector> {
     pub last_residue: f64,
     /// Cell grid over the fluid particles.
     pub fluid_grid: CellGrid<V>,
-    /// Lower bounds of the particles' distances to fixed walls, kept with the Verlet list.
-    wall_clearance: WallClearance,
+    /// Lower bounds of the particles' distances to the walls, kept with the Verlet list.
+    wall_clearance: WallClearance<V>,
     /// Wall-clock seconds spent per phase since the start.
     pub timings: PhaseTimes,
     scratch: Scratch<V>,
@@ -720,6 +720,12 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
+    /// Places the moving walls at the current time; the wall-distance bounds follow them.
+    pub(crate) fn move_walls(&mut self) {
+        self.walls.move_to(self.time);
+        self.wall_clearance.follow(&self.walls);
+    }
+
     pub(crate) fn rebuild_grid(&mut self, reorder: bool) {
         let start = Instant::now();
         self.scratch.candidates_valid = false;
@@ -835,10 +841,10 @@ impl<V: Vector> Simulation<V> {
         }
     }
 
-    /// Lower bounds of the particles' distances to the walls: with fixed walls and a Verlet
-    /// list, measured at its build and valid for the current positions; else none
-    /// ([`WallClearance::clear`] answers `false`).
-    pub fn wall_clearance(&self) -> &WallClearance {
+    /// Lower bounds of the particles' distances to the walls: with a Verlet list and walls
+    /// that do not stretch, measured at its build and valid for the current positions of the
+    /// particles and the walls; else none ([`WallClearance::clear`] answers `false`).
+    pub fn wall_clearance(&self) -> &WallClearance<V> {
         &self.wall_clearance
     }
 

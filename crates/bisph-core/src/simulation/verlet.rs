@@ -78,7 +78,7 @@ impl<V: Vector> Simulation<V> {
         self.last_dt = dt;
         self.check_state()?;
         // 2. walls, neighbours, rates at the predicted state.
-        self.walls.move_to(self.time);
+        self.move_walls();
         self.step_neighbours();
         self.advance_gamma(dt);
         if summation {

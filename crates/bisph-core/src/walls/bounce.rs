@@ -21,15 +21,16 @@ use rayon::prelude::*;
 /// relative to the element is reflected. `end`, when given (midpoint scheme), is the
 /// end-of-step velocity: its relative normal component is reflected too when it points into
 /// the wall, which keeps its magnitude. Without `end`, `drift` is also the particle velocity.
-/// Particles that `clearance` shows farther from every wall than the drift takes them are not
-/// searched (a bounce off element `j` needs `|x - c_j| - reach_j <= dt (drift - U_j) . n_j`).
+/// Particles that `clearance` shows farther from every wall than the drift and the fastest
+/// element take them together are not searched (a bounce off element `j` needs
+/// `|x - c_j| - reach_j <= dt (drift - U_j) . n_j`).
 /// Sets `lost_energy` to the kinetic energy each particle lost (energy given to moving
 /// walls).
 #[allow(clippy::too_many_arguments)]
 pub fn elastic_bounce<V: Vector>(
     elements: &BoundaryElements<V>,
     grid: &CellGrid<V>,
-    clearance: &WallClearance,
+    clearance: &WallClearance<V>,
     position: &[V],
     mass: &[f64],
     drift: &mut [V],
@@ -49,9 +50,14 @@ pub fn elastic_bounce<V: Vector>(
             *u -= n * (2.0 * normal_speed);
         }
     };
+    let wall_speed = elements
+        .velocity
+        .iter()
+        .map(|u| u.length())
+        .fold(0.0, f64::max);
     let visit = |i: usize, d: &mut V, mut e: Option<&mut V>, lost: &mut f64| {
         let x = position[i];
-        if grid.no_candidates(x) || clearance.clear(i, dt * d.length()) {
+        if grid.no_candidates(x) || clearance.clear(i, dt * (d.length() + wall_speed)) {
             // No element near: nothing to reflect (`lost` stays 0).
             return;
         }
@@ -97,5 +103,63 @@ pub fn elastic_bounce<V: Vector>(
             .enumerate()
             .with_min_len(256)
             .for_each(|(i, (d, lost))| visit(i, d, None, lost)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bodies::{Body, Motion, PrescribedMotion};
+    use crate::walls::Walls;
+    use glam::DVec3;
+
+    /// A wall moving towards a particle at rest reflects it when it would reach the particle
+    /// within the step, though the particle itself does not move: the skip by the clearance
+    /// counts the wall's own speed.
+    #[test]
+    fn a_wall_moving_onto_a_particle_at_rest_reflects_it() {
+        let side = 0.02;
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(a, b)| DVec3::new(a, b, 0.0) * (0.5 * side));
+        let mut elements = BoundaryElements::default();
+        elements.push(DVec3::ZERO, DVec3::Z, side * side, 1, &corners);
+        let motion = PrescribedMotion {
+            velocity: DVec3::new(0.0, 0.0, -2.0),
+            amplitude: DVec3::ZERO,
+            frequency: 0.0,
+            phase: 0.0,
+            axis: DVec3::Z,
+            angular_velocity: 0.0,
+            angular_amplitude: 0.0,
+            angular_frequency: 0.0,
+        };
+        let piston = Body {
+            name: "piston".into(),
+            centre: DVec3::ZERO,
+            motion: Motion::Prescribed(motion),
+        };
+        let mut walls = Walls::new(elements, vec![Body::fixed("walls"), piston], 0.25);
+        walls.move_to(0.0);
+        // 0.05 below the element: clear of it by more than 0.03, which the wall covers in the
+        // step of 0.03 s at 2 m/s twice over.
+        let position = [DVec3::new(0.0, 0.0, -0.05)];
+        let mut clearance = WallClearance::default();
+        clearance.measure(&walls, &position, 0.0);
+        assert!(clearance.clear(0, 0.03));
+        let mut drift = [DVec3::ZERO];
+        let mut lost = Vec::new();
+        let e = &walls.elements;
+        elastic_bounce(
+            e,
+            &walls.grid,
+            &clearance,
+            &position,
+            &[1.0],
+            &mut drift,
+            None,
+            0.03,
+            &mut lost,
+        );
+        assert_eq!(drift[0], DVec3::new(0.0, 0.0, -4.0));
     }
 }

@@ -1,9 +1,15 @@
-//! Lower bounds of the particles' distances to fixed walls, measured when the explicit
+//! Lower bounds of the particles' distances to the walls, measured when the explicit
 //! scheme's Verlet list is built and valid while it holds, for the particles that have not
-//! moved more than half the skin since (the others lose theirs). They spare the elastic bounce and the wall-crossing watch the
-//! element search for particles that no wall can concern within a step. A particle that lies
-//! behind a wall at the measurement (water that went over the rim of an open wall) gets no
-//! bound, so the watch looks at it at every step.
+//! moved more than half the skin since (the others lose theirs). They spare the elastic
+//! bounce and the wall-crossing watch the element search for particles that no wall can
+//! concern within a step. A particle that lies behind a wall at the measurement (water that
+//! went over the rim of an open wall) gets no bound, so the watch looks at it at every step.
+//!
+//! Walls of moving bodies keep their bounds as they move: an element's surface lies within its
+//! reach of its centre whatever the body's pose, so a bound falls by at most the distance its
+//! element's centre has moved since the measurement, and [`WallClearance::follow`] takes the
+//! largest such distance off every bound. Elements that stretch with a piston change their
+//! reach, so walls with such elements get no bounds.
 
 use super::Walls;
 use crate::dim::Vector;
@@ -13,24 +19,40 @@ use rayon::prelude::*;
 const REACH_ALLOWANCE: f64 = 1e-5;
 
 /// Per particle, a distance below which no wall surface comes (see the module documentation).
-#[derive(Clone, Debug, Default)]
-pub struct WallClearance {
+#[derive(Clone, Debug)]
+pub struct WallClearance<V> {
     /// `min_j (|x_i - c_j| - reach_j)` over the elements in the wall-grid cells around `x_i`
     /// at the measurement, at most one cell less the largest reach (no farther element can
     /// come closer), each reach widened by [`REACH_ALLOWANCE`].
     lower_bound: Vec<f64>,
     /// How far a particle may have moved since the measurement.
     slack: f64,
+    /// The element centres at the measurement, where some body moves (else empty).
+    centres: Vec<V>,
+    /// The largest distance an element centre has moved since the measurement.
+    wall_drift: f64,
     measured: bool,
 }
 
-impl WallClearance {
+impl<V> Default for WallClearance<V> {
+    fn default() -> Self {
+        WallClearance {
+            lower_bound: Vec::new(),
+            slack: 0.0,
+            centres: Vec::new(),
+            wall_drift: 0.0,
+            measured: false,
+        }
+    }
+}
+
+impl<V: Vector> WallClearance<V> {
     /// Measures the bounds at `points`; `slack` is how far a particle may move before the
-    /// caller measures again or [`WallClearance::forget`]s them. Walls that may move get no
-    /// bounds, nor do points behind a wall within a cell less the largest reach
-    /// ([`Walls::signed_distance`] positive).
-    pub fn measure<V: Vector>(&mut self, walls: &Walls<V>, points: &[V], slack: f64) {
-        if walls.has_moving_bodies() {
+    /// caller measures again or [`WallClearance::forget`]s them. Points behind a wall within a
+    /// cell less the largest reach ([`Walls::signed_distance`] positive) get no bounds, nor
+    /// does any point where elements stretch with a piston.
+    pub fn measure(&mut self, walls: &Walls<V>, points: &[V], slack: f64) {
+        if !walls.stretch.is_empty() {
             self.forget();
             return;
         }
@@ -62,7 +84,29 @@ impl WallClearance {
                 }
             });
         self.slack = slack;
+        self.centres.clear();
+        if walls.has_moving_bodies() {
+            self.centres.extend_from_slice(&elements.centre);
+        }
+        self.wall_drift = 0.0;
         self.measured = !elements.is_empty();
+    }
+
+    /// Takes the walls' motion since the measurement into account (after the walls were
+    /// placed anew): the largest distance an element centre has moved since then.
+    pub fn follow(&mut self, walls: &Walls<V>) {
+        if !self.measured || self.centres.is_empty() {
+            return;
+        }
+        let now = &walls.elements.centre;
+        self.wall_drift = if now.len() == self.centres.len() {
+            now.iter()
+                .zip(&self.centres)
+                .map(|(&c, &c0)| (c - c0).length())
+                .fold(0.0, |a, d| if d > a || d.is_nan() { d } else { a })
+        } else {
+            f64::INFINITY
+        };
     }
 
     /// Drops the bounds of the particles `moved` (they have moved farther than the slack
@@ -83,7 +127,7 @@ impl WallClearance {
         }
     }
 
-    /// Drops the bounds (the particles were reordered, or the walls may move).
+    /// Drops the bounds (the particles were reordered).
     pub fn forget(&mut self) {
         self.measured = false;
     }
@@ -97,14 +141,14 @@ impl WallClearance {
             && self
                 .lower_bound
                 .get(i)
-                .is_some_and(|&bound| bound - self.slack > distance)
+                .is_some_and(|&bound| bound - self.slack - self.wall_drift > distance)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bodies::Body;
+    use crate::bodies::{Body, Motion, PrescribedMotion};
     use crate::geometry::box_elements_3d;
     use crate::walls::BoundaryElements;
     use glam::DVec3;
@@ -116,6 +160,39 @@ mod tests {
             e.push(s.centre, s.normal, s.area, 0, &s.corners);
         }
         Walls::new(e, vec![Body::fixed("walls")], 0.25)
+    }
+
+    /// The box of [`open_box`] as body 1, sliding and turning about its centre.
+    fn moving_box() -> Walls<DVec3> {
+        let mut walls = open_box();
+        walls.elements.body.iter_mut().for_each(|b| *b = 1);
+        let motion = PrescribedMotion {
+            velocity: DVec3::new(0.3, -0.1, 0.2),
+            amplitude: DVec3::ZERO,
+            frequency: 0.0,
+            phase: 0.0,
+            axis: DVec3::new(1.0, 2.0, 2.0) / 3.0,
+            angular_velocity: 1.5,
+            angular_amplitude: 0.0,
+            angular_frequency: 0.0,
+        };
+        walls.bodies.push(Body {
+            name: "box".into(),
+            centre: DVec3::splat(0.5),
+            motion: Motion::Prescribed(motion),
+        });
+        walls.move_to(0.0);
+        walls
+    }
+
+    /// Points in and around the unit box.
+    fn scattered_points() -> Vec<DVec3> {
+        (0..4000)
+            .map(|k| {
+                let f = |m: u64| ((k as u64 * m) % 1009) as f64 / 1009.0;
+                DVec3::new(f(389), f(677), f(853)) * 1.4 - DVec3::splat(0.2)
+            })
+            .collect()
     }
 
     /// Distance from `x` to the nearest element, each an axis-aligned rectangle.
@@ -135,12 +212,7 @@ mod tests {
     #[test]
     fn bounds_stay_below_the_distance_to_the_walls() {
         let walls = open_box();
-        let points: Vec<DVec3> = (0..4000)
-            .map(|k| {
-                let f = |m: u64| ((k as u64 * m) % 1009) as f64 / 1009.0;
-                DVec3::new(f(389), f(677), f(853)) * 1.4 - DVec3::splat(0.2)
-            })
-            .collect();
+        let points = scattered_points();
         let mut clearance = WallClearance::default();
         assert!(!clearance.clear(0, 0.0));
         clearance.measure(&walls, &points, 0.0);
@@ -179,6 +251,45 @@ mod tests {
             clearance.clear(1, 0.01),
             "inside: {}",
             clearance.lower_bound[1]
+        );
+    }
+
+    /// Bounds measured before a body moves hold wherever it has moved: a point clear by a
+    /// distance is farther than that from the moved walls (measured in the body's own frame,
+    /// where they are the box of [`open_box`]); as the body moves away from the measurement,
+    /// fewer points are clear.
+    #[test]
+    fn bounds_follow_a_moving_body() {
+        let mut walls = moving_box();
+        let at_rest = open_box();
+        let points = scattered_points();
+        let mut clearance = WallClearance::default();
+        clearance.measure(&walls, &points, 0.0);
+        let margin = 0.02;
+        let clear_at = |clearance: &WallClearance<DVec3>| {
+            (0..points.len())
+                .filter(|&i| clearance.clear(i, margin))
+                .count()
+        };
+        let mut clear = vec![clear_at(&clearance)];
+        for t in [0.02, 0.05, 0.1] {
+            walls.move_to(t);
+            clearance.follow(&walls);
+            let k = walls.bodies[1].motion.kinematics(t);
+            let centre = walls.bodies[1].centre;
+            for (i, &x) in points.iter().enumerate() {
+                if clearance.clear(i, margin) {
+                    let in_body = (x - centre - k.displacement).rotated_by(-k.rotation) + centre;
+                    let distance = distance_to_elements(&at_rest, in_body);
+                    assert!(distance > margin, "t = {t}, {x}: distance {distance}");
+                }
+            }
+            clear.push(clear_at(&clearance));
+        }
+        assert!(clear[1] > 400, "{clear:?} points clear");
+        assert!(
+            clear.windows(2).all(|w| w[1] < w[0]),
+            "{clear:?} points clear"
         );
     }
 }
