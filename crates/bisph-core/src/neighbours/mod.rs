@@ -33,4 +33,4 @@ mod pair_blocks;
 pub use candidate_rows::{CandidateRows, Nearby};
 
 pub use grid::{CellGrid, KeptBlock, PairList, Periodicity};
-pub use pair_blocks::{renumbering, ListedPairs, PairBlocks, RunValues, GONE};
+pub use pair_blocks::{renumbering, ListedPairs, Listing, PairBlocks, RunValues, GONE};

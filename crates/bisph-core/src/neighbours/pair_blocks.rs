@@ -281,37 +281,64 @@ impl<V: Vector> PairBlocks<V> {
     }
 
     /// Lists into `listed` the pairs within `radius` at the positions `points` (none farther
-    /// than half the skin from where it was at the build), each with its `r_ij` and
-    /// `factor(|r_ij|)`, in the order of [`PairBlocks::sweep`]; in parallel over chunks.
+    /// than half the skin from where it was at the build), each with what `listing` asks
+    /// for, in the order of [`PairBlocks::sweep`]; in parallel over chunks.
     pub fn list(
         &self,
         points: &[V],
         radius: f64,
         factor: impl Fn(f64) -> f64 + Sync,
+        listing: Listing,
         listed: &mut ListedPairs<V>,
     ) {
         listed.len = self.len();
+        listed.listing = listing;
         listed.classes.resize_with(self.classes.len(), Vec::new);
         let r2max = radius * radius;
         for (to, from) in listed.classes.iter_mut().zip(&self.classes) {
             to.resize_with(from.len(), Default::default);
-            to.par_iter_mut()
-                .zip(from.par_iter())
-                .for_each_init(KeptBlock::new, |kept, (to, from)| {
-                    to.fill(from, points, r2max, &self.period, kept, &factor)
-                });
+            to.par_iter_mut().zip(from.par_iter()).for_each_init(
+                KeptBlock::new,
+                |kept, (to, from)| {
+                    to.fill(from, points, r2max, &self.period, kept, (&factor, listing))
+                },
+            );
+        }
+    }
+}
+
+/// What [`PairBlocks::list`] stores with each pair besides the partner's index.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Listing {
+    /// `r_ij` and the per-pair factor `F(|r_ij|)`.
+    #[default]
+    OffsetAndFactor,
+    /// The product `r_ij F(|r_ij|)` alone (the kernel gradient, with `F` the kernel
+    /// gradient factor), for sums that read nothing else of a pair: 8 bytes less per pair.
+    Product,
+}
+
+impl Listing {
+    /// Bytes stored per pair.
+    pub fn pair_bytes<V>(self) -> usize {
+        let vector = std::mem::size_of::<V>();
+        match self {
+            Listing::OffsetAndFactor => 4 + vector + 8,
+            Listing::Product => 4 + vector,
         }
     }
 }
 
 /// The pairs of a [`PairBlocks`] within a radius at fixed positions (the iterations of a
 /// midpoint step), each with its `r_ij` and a per-pair factor (the kernel gradient factor
-/// for the fluid sums): the blocks' rows and order without the filter. `4 + size_of::<V>()
-/// + 8` bytes per pair (28 in 2-D, 36 in 3-D); the buffers are kept between listings.
+/// for the fluid sums) or with their product ([`Listing`]): the blocks' rows and order
+/// without the filter. [`Listing::pair_bytes`] per pair (36 or 28 in 3-D); the buffers are
+/// kept between listings.
 #[derive(Clone, Debug, Default)]
 pub struct ListedPairs<V> {
     classes: Vec<Vec<ListedChunk<V>>>,
     len: usize,
+    listing: Listing,
 }
 
 /// The listed pairs of one [`BlockChunk`].
@@ -320,13 +347,17 @@ struct ListedChunk<V> {
     first: Vec<u32>,
     start: Vec<u32>,
     second: Vec<u32>,
+    /// `r_ij`, or `r_ij F(|r_ij|)` under [`Listing::Product`].
     offset: Vec<V>,
+    /// `F(|r_ij|)`; empty under [`Listing::Product`].
     factor: Vec<f64>,
 }
 
 impl<V: Vector> ListedPairs<V> {
-    /// Bytes stored per pair.
-    pub const PAIR_BYTES: usize = 4 + std::mem::size_of::<V>() + 8;
+    /// What is listed with each pair.
+    pub fn listing(&self) -> Listing {
+        self.listing
+    }
 
     /// Number of pairs listed.
     pub fn pairs(&self) -> usize {
@@ -335,7 +366,8 @@ impl<V: Vector> ListedPairs<V> {
 
     /// [`PairBlocks::sweep`] over the listed pairs: `visit(i, values, index, r_ij, factor)`
     /// for each row, with the same pairs in the same order as the blocks' sweep at the
-    /// positions of the listing.
+    /// positions of the listing; under [`Listing::Product`], `r_ij` holds the products and
+    /// `factor` is empty.
     ///
     /// # Panics
     /// When `values` holds fewer entries than the list's points.
@@ -354,7 +386,8 @@ impl<V: Vector> ListedPairs<V> {
                     let index = &chunk.second[s..e];
                     let i = i as usize;
                     let mut run = RunValues { shared, i, index };
-                    visit(i, &mut run, index, &chunk.offset[s..e], &chunk.factor[s..e]);
+                    let factor = chunk.factor.get(s..e).unwrap_or_default();
+                    visit(i, &mut run, index, &chunk.offset[s..e], factor);
                 }
             },
         );
@@ -362,7 +395,8 @@ impl<V: Vector> ListedPairs<V> {
 }
 
 impl<V: Vector> ListedChunk<V> {
-    /// Lists the pairs of `from` within `sqrt(r2max)` at `points`.
+    /// Lists the pairs of `from` within `sqrt(r2max)` at `points`, each with what `listing`
+    /// asks for (`factor` gives the per-pair factor from `|r_ij|`).
     fn fill(
         &mut self,
         from: &BlockChunk,
@@ -370,7 +404,7 @@ impl<V: Vector> ListedChunk<V> {
         r2max: f64,
         period: &Periodicity<V>,
         kept: &mut KeptBlock<V>,
-        factor: &(impl Fn(f64) -> f64 + Sync),
+        (factor, listing): (&(impl Fn(f64) -> f64 + Sync), Listing),
     ) {
         self.first.clear();
         self.start.clear();
@@ -385,8 +419,17 @@ impl<V: Vector> ListedChunk<V> {
                 self.start.push(self.second.len() as u32);
             }
             self.second.extend_from_slice(index);
-            self.offset.extend_from_slice(r_ij);
-            self.factor.extend(r2.iter().map(|&r2| factor(r2.sqrt())));
+            match listing {
+                Listing::OffsetAndFactor => {
+                    self.offset.extend_from_slice(r_ij);
+                    self.factor.extend(r2.iter().map(|&r2| factor(r2.sqrt())));
+                }
+                Listing::Product => self.offset.extend(
+                    r_ij.iter()
+                        .zip(r2)
+                        .map(|(&r_ij, &r2)| r_ij * factor(r2.sqrt())),
+                ),
+            }
             *self.start.last_mut().unwrap() = self.second.len() as u32;
         });
     }
@@ -628,7 +671,7 @@ mod tests {
         // The listed pairs: the same pairs in the same order, with their factors.
         let mut listed = ListedPairs::default();
         let factor = |r: f64| 1.0 + r;
-        list.list(at, radius, factor, &mut listed);
+        list.list(at, radius, factor, Listing::OffsetAndFactor, &mut listed);
         let mut again = vec![Vec::new(); at.len()];
         listed.sweep(&mut again, |i, run, index, r_ij, f| {
             for (k, &j) in index.iter().enumerate() {
@@ -639,6 +682,19 @@ mod tests {
             }
         });
         assert_eq!(again, order);
+        // Their products alone: the same pairs again, `r_ij F` to the bit.
+        list.list(at, radius, factor, Listing::Product, &mut listed);
+        let mut products = vec![Vec::new(); at.len()];
+        listed.sweep(&mut products, |i, run, index, product, f| {
+            assert!(f.is_empty());
+            for (k, &j) in index.iter().enumerate() {
+                let expected = period.minimum_image(at[j as usize] - at[i]);
+                assert_eq!(product[k], expected * factor(expected.length()));
+                run.first().push(keys[j as usize]);
+                run.partner(k).push(keys[i]);
+            }
+        });
+        assert_eq!(products, order);
         assert_eq!(
             listed.pairs() * 2,
             order.iter().map(Vec::len).sum::<usize>()

@@ -25,13 +25,13 @@ use crate::error::SimError;
 use crate::forcing::{FluxControl, FluxHistory};
 use crate::kernel::Wendland;
 use crate::neighbours::{
-    CandidateRows, CellGrid, ListedPairs, Nearby, PairBlocks, PairList, Periodicity,
+    CandidateRows, CellGrid, ListedPairs, Listing, Nearby, PairBlocks, PairList, Periodicity,
 };
 use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
-    compute_rates, particle_operators, DensityDiffusion, DiffusionForm, DissipationRates,
-    FluidNeighbours, FluidSums, RateModel, Viscosity,
+    compute_rates, pair_listing, particle_operators, DensityDiffusion, DiffusionForm,
+    DissipationRates, FluidNeighbours, FluidSums, RateModel, Viscosity,
 };
 use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
@@ -931,17 +931,27 @@ impl<V: Vector> Simulation<V> {
                 .rebuild(&self.fluid_grid, position, owned, kernel.support);
         }
         s.pairs_frozen = true;
+        let inputs = WallModelInputs {
+            gravity: self.config.gravity,
+            vertices: &self.vertices,
+            listed: None,
+        };
+        let listing = self
+            .config
+            .wall_model
+            .run(inputs, PairListing(&self.rate_model()));
         // Each pair once.
         let bytes = 0.5
             * listed_pairs(&self.config, self.fluid.len(), kernel.support)
-            * ListedPairs::<V>::PAIR_BYTES as f64;
+            * listing.pair_bytes::<V>() as f64;
         if !bytes.is_finite() || bytes > self.config.pair_list_budget as f64 {
             self.timings.neighbours += start.elapsed().as_secs_f64();
             return;
         }
         let factor = |r| kernel.gradient_factor(r);
+        let s = &mut self.scratch;
         s.candidates
-            .list(position, kernel.support, factor, &mut s.pairs);
+            .list(position, kernel.support, factor, listing, &mut s.pairs);
         s.pairs_listed = true;
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
         // (once per side); a wetted element sees at most half a kernel sphere of particles.
@@ -1439,6 +1449,18 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
             self.pair_sums,
         );
         wall_seconds
+    }
+}
+
+/// What a midpoint step lists with its fluid pairs for the sums of one wall model
+/// ([`pair_listing`]).
+struct PairListing<'a, V: Vector>(&'a RateModel<V>);
+
+impl<V: Vector> WallModelTask<V> for PairListing<'_, V> {
+    type Output = Listing;
+
+    fn run<W: WallModel<V>>(self, wall_model: &W) -> Listing {
+        pair_listing(self.0, wall_model)
     }
 }
 

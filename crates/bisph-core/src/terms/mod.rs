@@ -17,7 +17,7 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, Nearby, PairBlocks, RunValues};
+use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, Listing, Nearby, PairBlocks, RunValues};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -504,16 +504,54 @@ fn scattered_sums<
             },
         ),
         // `|r_ij|` as the filter computes it (the root of `r_ij . r_ij`), the same bits.
-        Scattered::Listed(listed) => listed.sweep(sums, |i, run, index, r_ij, factor| {
-            scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
-                model,
-                &values,
-                (i, run),
-                index,
-                r_ij,
-                |k| (r_ij[k].length(), factor[k]),
-            )
-        }),
+        Scattered::Listed(listed) => match listed.listing() {
+            Listing::OffsetAndFactor => listed.sweep(sums, |i, run, index, r_ij, factor| {
+                scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                    model,
+                    &values,
+                    (i, run),
+                    index,
+                    r_ij,
+                    |k| (r_ij[k].length(), factor[k]),
+                )
+            }),
+            // The kernel gradients as offsets with a factor of 1: `grad W` to the bit, and no
+            // term reads `|r_ij|` (the NaN would show).
+            Listing::Product => {
+                assert!(
+                    !sums_need_distances(DIFFUSE, VISCID, SHEPARD),
+                    "pairs listed without their distances"
+                );
+                listed.sweep(sums, |i, run, index, gradient, _| {
+                    scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                        model,
+                        &values,
+                        (i, run),
+                        index,
+                        gradient,
+                        |_| (f64::NAN, 1.0),
+                    )
+                })
+            }
+        },
+    }
+}
+
+/// `true` when a sweep with these switches reads the pairs' distances and kernel gradient
+/// factors, not only their kernel gradients: density diffusion, viscosity or the discrete
+/// Shepard sum.
+const fn sums_need_distances(diffuse: bool, viscid: bool, shepard: bool) -> bool {
+    diffuse || viscid || shepard
+}
+
+/// What the pairs of a midpoint step are listed with for the fluid sums of `model` with
+/// `wall_model` ([`FluidNeighbours::Listed`]).
+pub fn pair_listing<V: Vector, W: WallModel<V>>(model: &RateModel<V>, wall_model: &W) -> Listing {
+    let [_, diffuse, viscid, shepard] = sum_switches(model, wall_model);
+    if sums_need_distances(diffuse, viscid, shepard) {
+        Listing::OffsetAndFactor
+    } else {
+        Listing::Product
     }
 }
 
