@@ -169,8 +169,9 @@ struct Scratch<V> {
     anderson: anderson::Anderson<V>,
     drift_velocity: Vec<V>,
     permute: PermuteScratch<V>,
-    /// The fluid pairs of the current positions, with kernel gradient factors, while
-    /// `pairs_listed` (inside a midpoint step, see [`Simulation::list_pairs`]).
+    /// The fluid pairs of the current positions, with kernel gradient factors or gradients
+    /// ([`pair_listing`]), while `pairs_listed` (inside a midpoint step, see
+    /// [`Simulation::list_pairs`]).
     pairs: ListedPairs<V>,
     pairs_listed: bool,
     /// The positions are frozen (inside a midpoint step) and the Verlet list holds the pairs

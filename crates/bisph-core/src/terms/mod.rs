@@ -65,9 +65,10 @@ pub enum FluidNeighbours<'a, V: Vector> {
     /// differ from the grid's in the last bits (and `r_ij` too across periodic axes, where
     /// it is the minimum image).
     Pairs(&'a PairBlocks<V>),
-    /// The pairs of a [`PairBlocks`] listed with their offsets and kernel gradient factors at
-    /// frozen positions (the iterations of a midpoint step): the sums of
-    /// [`FluidNeighbours::Pairs`] at those positions, to the bit.
+    /// The pairs of a [`PairBlocks`] listed with their offsets and kernel gradient factors, or
+    /// with their kernel gradients alone ([`pair_listing`]), at frozen positions (the
+    /// iterations of a midpoint step): the sums of [`FluidNeighbours::Pairs`] at those
+    /// positions, to the bit.
     Listed(&'a ListedPairs<V>),
 }
 
