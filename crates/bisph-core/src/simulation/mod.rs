@@ -31,7 +31,7 @@ use crate::particles::{Fluid, FluidState, PermuteScratch};
 use crate::probes::Probe;
 use crate::terms::{
     compute_rates, pair_listing, particle_operators, DensityDiffusion, DiffusionForm,
-    DissipationRates, FluidNeighbours, FluidSums, RateModel, Viscosity,
+    DissipationRates, FluidNeighbours, RateModel, ScatterBuffers, Viscosity,
 };
 use crate::walls::clearance::WallClearance;
 use crate::walls::energy_bi::ListedEnergyWalls;
@@ -192,8 +192,8 @@ struct Scratch<V> {
     moved_anywhere: bool,
     /// The cell grid indexes the positions of the list's build (else the current ones).
     grid_at_build: bool,
-    /// The fluid sums of a sweep over the Verlet list's pairs.
-    pair_sums: Vec<FluidSums<V>>,
+    /// The buffers of a sweep over the Verlet list's or the listed pairs.
+    scatter: ScatterBuffers<V>,
     candidates_valid: bool,
     /// The list was checked for the current positions: the next rate evaluation reads it.
     use_candidates: bool,
@@ -1089,7 +1089,7 @@ impl<V: Vector> Simulation<V> {
             acceleration: &mut acceleration[..owned],
             density_rate: &mut density_rate[..owned],
             dissipation: &mut dissipation[..owned],
-            pair_sums: &mut self.scratch.pair_sums,
+            scatter: &mut self.scratch.scatter,
         };
         self.timings.wall_pressure += vertex_seconds + self.config.wall_model.run(inputs, sweep);
         let d = &self.scratch.dissipation;
@@ -1426,7 +1426,7 @@ struct Sweep<'a, V: Vector> {
     acceleration: &'a mut [V],
     density_rate: &'a mut [f64],
     dissipation: &'a mut [DissipationRates],
-    pair_sums: &'a mut Vec<FluidSums<V>>,
+    scatter: &'a mut ScatterBuffers<V>,
 }
 
 impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
@@ -1447,7 +1447,7 @@ impl<V: Vector> WallModelTask<V> for Sweep<'_, V> {
             self.acceleration,
             self.density_rate,
             self.dissipation,
-            self.pair_sums,
+            self.scatter,
         );
         wall_seconds
     }

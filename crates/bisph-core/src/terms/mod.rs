@@ -273,13 +273,65 @@ impl<V: Vector> FluidSums<V> {
     }
 }
 
+/// Sums a scatter adds the pair shares into.
+trait Accumulator<V: Vector>: Copy + Send {
+    fn accumulate<const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
+        &mut self,
+        c: &FluidSums<V>,
+    );
+}
+
+impl<V: Vector> Accumulator<V> for FluidSums<V> {
+    #[inline(always)]
+    fn accumulate<const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
+        &mut self,
+        c: &FluidSums<V>,
+    ) {
+        self.add::<DIFFUSE, VISCID, SHEPARD>(c)
+    }
+}
+
+/// The pressure-gradient and divergence sums alone, for sweeps with no other term on.
+#[derive(Clone, Copy, Debug)]
+struct GradientSums<V> {
+    grad_p: V,
+    div_u: f64,
+}
+
+impl<V: Vector> GradientSums<V> {
+    const ZERO: Self = GradientSums {
+        grad_p: V::ZERO,
+        div_u: 0.0,
+    };
+}
+
+impl<V: Vector> Accumulator<V> for GradientSums<V> {
+    #[inline(always)]
+    fn accumulate<const DIFFUSE: bool, const VISCID: bool, const SHEPARD: bool>(
+        &mut self,
+        c: &FluidSums<V>,
+    ) {
+        self.grad_p += c.grad_p;
+        self.div_u += c.div_u;
+    }
+}
+
 /// What the pair terms read of one particle.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Side<V> {
     u: V,
     rho: f64,
     p: f64,
     volume: f64,
+}
+
+impl<V: Vector> Side<V> {
+    const ZERO: Self = Side {
+        u: V::ZERO,
+        rho: 0.0,
+        p: 0.0,
+        volume: 0.0,
+    };
 }
 
 /// The fluid values the pair terms read, as slices of one length (an index checked against
@@ -438,21 +490,21 @@ fn scatter_run<
     const SHEPARD: bool,
 >(
     model: &RateModel<V>,
-    values: &PairValues<'_, V>,
-    (i, run): (usize, &mut RunValues<'_, FluidSums<V>>),
+    sides: &[Side<V>],
+    (i, run): (usize, &mut RunValues<'_, impl Accumulator<V>>),
     index: &[u32],
     r_ij: &[V],
     r_f: impl Fn(usize) -> (f64, f64),
 ) {
-    let a = values.side(i);
+    let a = sides[i];
     let mut own = *run.first();
     for (k, (&j, &r_ij)) in index.iter().zip(r_ij).enumerate() {
         let (r, f) = r_f(k);
-        let b = values.side(j as usize);
+        let b = sides[j as usize];
         let [to_i, to_j] =
             pair_shares::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, &a, &b, r_ij, r, f);
-        own.add::<DIFFUSE, VISCID, SHEPARD>(&to_i);
-        run.partner(k).add::<DIFFUSE, VISCID, SHEPARD>(&to_j);
+        own.accumulate::<DIFFUSE, VISCID, SHEPARD>(&to_i);
+        run.partner(k).accumulate::<DIFFUSE, VISCID, SHEPARD>(&to_j);
     }
     *run.first() = own;
 }
@@ -464,9 +516,38 @@ enum Scattered<'a, V> {
     Listed(&'a ListedPairs<V>),
 }
 
-/// The fluid sums of every listed particle into `sums`, each pair of a Verlet list (filtered
-/// at the positions) or of its listed pairs evaluated once and its shares added to both
-/// particles.
+/// The buffers of the scatter sweeps, kept from one sweep to the next: the values the pair
+/// terms read, packed per particle (one cache line's reach per partner instead of four
+/// arrays), and the sums, as [`FluidSums`] or, when only the pressure gradient and the
+/// divergence are summed, as the smaller [`GradientSums`].
+#[derive(Clone, Debug, Default)]
+pub struct ScatterBuffers<V> {
+    sides: Vec<Side<V>>,
+    sums: Vec<FluidSums<V>>,
+    gradient_sums: Vec<GradientSums<V>>,
+    gradient_only: bool,
+}
+
+impl<V: Vector> ScatterBuffers<V> {
+    /// The fluid sums of particle `i` of the last [`scattered_sums`].
+    #[inline(always)]
+    fn sums(&self, i: usize) -> FluidSums<V> {
+        if self.gradient_only {
+            let GradientSums { grad_p, div_u } = self.gradient_sums[i];
+            FluidSums {
+                grad_p,
+                div_u,
+                ..FluidSums::ZERO
+            }
+        } else {
+            self.sums[i]
+        }
+    }
+}
+
+/// The fluid sums of every listed particle into `buffers`, each pair of a Verlet list
+/// (filtered at the positions) or of its listed pairs evaluated once and its shares added to
+/// both particles.
 #[inline(never)]
 fn scattered_sums<
     V: Vector,
@@ -478,13 +559,54 @@ fn scattered_sums<
     model: &RateModel<V>,
     fluid: &FluidState<V>,
     neighbours: Scattered<'_, V>,
-    sums: &mut [FluidSums<V>],
+    buffers: &mut ScatterBuffers<V>,
+) {
+    let values = PairValues::of(fluid);
+    let n = values.velocity.len();
+    buffers.sides.resize(n, Side::ZERO);
+    buffers
+        .sides
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(4096)
+        .for_each(|(i, side)| *side = values.side(i));
+    buffers.gradient_only = !sums_need_distances(DIFFUSE, VISCID, SHEPARD);
+    let sides = &buffers.sides[..];
+    if buffers.gradient_only {
+        let sums = zeroed(&mut buffers.gradient_sums, n, GradientSums::ZERO);
+        sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, fluid, sides, neighbours, sums);
+    } else {
+        let sums = zeroed(&mut buffers.sums, n, FluidSums::ZERO);
+        sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, fluid, sides, neighbours, sums);
+    }
+}
+
+/// `buffer` resized to `n` values, all `zero`.
+fn zeroed<T: Copy + Send + Sync>(buffer: &mut Vec<T>, n: usize, zero: T) -> &mut [T] {
+    buffer.resize(n, zero);
+    buffer
+        .par_iter_mut()
+        .with_min_len(4096)
+        .for_each(|s| *s = zero);
+    buffer
+}
+
+/// The shares of every pair of `neighbours` added to the sums of both its particles, with
+/// `sides` the packed values of the particles.
+fn sweep_into<
+    V: Vector,
+    const WEIGHTED: bool,
+    const DIFFUSE: bool,
+    const VISCID: bool,
+    const SHEPARD: bool,
+>(
+    model: &RateModel<V>,
+    fluid: &FluidState<V>,
+    sides: &[Side<V>],
+    neighbours: Scattered<'_, V>,
+    sums: &mut [impl Accumulator<V> + Sync],
 ) {
     let kernel = &model.kernel;
-    let values = PairValues::of(fluid);
-    sums.par_iter_mut()
-        .with_min_len(4096)
-        .for_each(|s| *s = FluidSums::ZERO);
     match neighbours {
         Scattered::Filtered(pairs) => pairs.sweep(
             fluid.position,
@@ -493,7 +615,7 @@ fn scattered_sums<
             |i, run, index, r_ij, r2| {
                 scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
                     model,
-                    &values,
+                    sides,
                     (i, run),
                     index,
                     r_ij,
@@ -509,7 +631,7 @@ fn scattered_sums<
             Listing::OffsetAndFactor => listed.sweep(sums, |i, run, index, r_ij, factor| {
                 scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
                     model,
-                    &values,
+                    sides,
                     (i, run),
                     index,
                     r_ij,
@@ -526,7 +648,7 @@ fn scattered_sums<
                 listed.sweep(sums, |i, run, index, gradient, _| {
                     scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
                         model,
-                        &values,
+                        sides,
                         (i, run),
                         index,
                         gradient,
@@ -558,9 +680,9 @@ pub fn pair_listing<V: Vector, W: WallModel<V>>(model: &RateModel<V>, wall_model
 
 /// Evaluates `du/dt` and `drho/dt` of every particle at the state `fluid` (paper 1 eqs 1-2)
 /// into `acceleration` and `density_rate`, in parallel; `dissipation` receives each
-/// particle's [`DissipationRates`] (zero for a term that is off). `pair_sums` holds the fluid
-/// sums of a sweep over [`FluidNeighbours::Pairs`]; `wall_near` finds the elements near a
-/// particle.
+/// particle's [`DissipationRates`] (zero for a term that is off). `scatter` keeps the buffers
+/// of a sweep over [`FluidNeighbours::Pairs`] or [`FluidNeighbours::Listed`]; `wall_near`
+/// finds the elements near a particle.
 #[allow(clippy::too_many_arguments)]
 pub fn compute_rates<V: Vector, W: WallModel<V>>(
     model: &RateModel<V>,
@@ -572,7 +694,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     acceleration: &mut [V],
     density_rate: &mut [f64],
     dissipation: &mut [DissipationRates],
-    pair_sums: &mut Vec<FluidSums<V>>,
+    scatter: &mut ScatterBuffers<V>,
 ) {
     let switches = sum_switches(model, wall_model);
     let scattered = match neighbours {
@@ -581,10 +703,9 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
         FluidNeighbours::Listed(listed) => Some(Scattered::Listed(listed)),
     };
     if let Some(pairs) = scattered {
-        pair_sums.resize(fluid.position.len(), FluidSums::ZERO);
-        with_switches!(switches, scattered_sums(model, fluid, pairs, pair_sums));
+        with_switches!(switches, scattered_sums(model, fluid, pairs, scatter));
     }
-    let pair_sums = &pair_sums[..];
+    let scatter = &*scatter;
     let body = model.gravity + model.body_force;
     acceleration
         .par_iter_mut()
@@ -596,7 +717,7 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
                 FluidNeighbours::Grid(grid) => {
                     with_switches!(switches, fluid_sums(model, fluid, grid, kept, i))
                 }
-                _ => pair_sums[i],
+                _ => scatter.sums(i),
             };
             let walls = (wall_model, elements, wall_near);
             let op = operators_with(model, walls, fluid, &sums, i);
