@@ -291,7 +291,8 @@ impl<V: Vector> Accumulator<V> for FluidSums<V> {
     }
 }
 
-/// The pressure-gradient and divergence sums alone, for sweeps with no other term on.
+/// The pressure-gradient and divergence sums alone, for sweeps with no other term on
+/// (density diffusion, viscosity and the discrete Shepard sum off).
 #[derive(Clone, Copy, Debug)]
 struct GradientSums<V> {
     grad_p: V,
@@ -311,6 +312,7 @@ impl<V: Vector> Accumulator<V> for GradientSums<V> {
         &mut self,
         c: &FluidSums<V>,
     ) {
+        debug_assert!(!sums_need_distances(DIFFUSE, VISCID, SHEPARD));
         self.grad_p += c.grad_p;
         self.div_u += c.div_u;
     }
@@ -517,8 +519,8 @@ enum Scattered<'a, V> {
 }
 
 /// The buffers of the scatter sweeps, kept from one sweep to the next: the values the pair
-/// terms read, packed per particle (one cache line's reach per partner instead of four
-/// arrays), and the sums, as [`FluidSums`] or, when only the pressure gradient and the
+/// terms read, packed per particle (one load of 48 bytes in 3-D per partner instead of one
+/// from each of four arrays), and the sums, as [`FluidSums`] or, when only the pressure gradient and the
 /// divergence are summed, as the smaller [`GradientSums`].
 #[derive(Clone, Debug, Default)]
 pub struct ScatterBuffers<V> {
