@@ -31,6 +31,11 @@ pub struct Fluid<V: Vector> {
     pub earlier_acceleration: Vec<V>,
     /// Density rates of the step before (see `earlier_acceleration`).
     pub earlier_density_rate: Vec<f64>,
+    /// Accelerations of the step before `earlier_acceleration`'s (empty unless the midpoint
+    /// integrator runs): the third point of its first guess.
+    pub earliest_acceleration: Vec<V>,
+    /// Density rates of the step before the earlier (see `earliest_acceleration`).
+    pub earliest_density_rate: Vec<f64>,
     /// The Shepard factor `gamma_i` the particle carries: geometric (paper 2) or integrated
     /// (paper 3, eq 4); 1 when unused.
     pub gamma: Vec<f64>,
@@ -82,6 +87,10 @@ impl<V: Vector> Fluid<V> {
             permute_into(&mut self.earlier_acceleration, order, &mut scratch.vectors);
             permute_into(&mut self.earlier_density_rate, order, &mut scratch.scalars);
         }
+        if !self.earliest_acceleration.is_empty() {
+            permute_into(&mut self.earliest_acceleration, order, &mut scratch.vectors);
+            permute_into(&mut self.earliest_density_rate, order, &mut scratch.scalars);
+        }
         permute_into(&mut self.gamma, order, &mut scratch.scalars);
         permute_into(&mut self.grad_gamma, order, &mut scratch.vectors);
         permute_into(&mut self.density_offset, order, &mut scratch.scalars);
@@ -90,7 +99,7 @@ impl<V: Vector> Fluid<V> {
 
 impl<V: Vector> Fluid<V> {
     /// Words per particle in [`Fluid::encode`]: the id and every state and rate array.
-    pub const RECORD_WORDS: usize = 8 + 5 * V::DIM;
+    pub const RECORD_WORDS: usize = 9 + 6 * V::DIM;
 
     /// Keeps the first `n` particles.
     pub fn truncate(&mut self, n: usize) {
@@ -104,16 +113,20 @@ impl<V: Vector> Fluid<V> {
         self.density_rate.truncate(n);
         self.earlier_acceleration.truncate(n);
         self.earlier_density_rate.truncate(n);
+        self.earliest_acceleration.truncate(n);
+        self.earliest_density_rate.truncate(n);
         self.gamma.truncate(n);
         self.grad_gamma.truncate(n);
         self.density_offset.truncate(n);
     }
 
-    /// Gives every particle the arrays of the step before (zero), so that every particle
+    /// Gives every particle the arrays of the steps before (zero), so that every particle
     /// carries the same fields ([`Fluid::encode`]).
     pub fn hold_earlier_rates(&mut self) {
         self.earlier_acceleration.resize(self.len(), V::ZERO);
         self.earlier_density_rate.resize(self.len(), 0.0);
+        self.earliest_acceleration.resize(self.len(), V::ZERO);
+        self.earliest_density_rate.resize(self.len(), 0.0);
     }
 
     /// Appends the whole record of each particle of `indices` to `out`, bit for bit
@@ -127,6 +140,7 @@ impl<V: Vector> Fluid<V> {
                 self.velocity[i],
                 self.acceleration[i],
                 self.earlier_acceleration[i],
+                self.earliest_acceleration[i],
                 self.grad_gamma[i],
             ] {
                 push_vector(out, v);
@@ -138,6 +152,7 @@ impl<V: Vector> Fluid<V> {
                     self.pressure[i],
                     self.density_rate[i],
                     self.earlier_density_rate[i],
+                    self.earliest_density_rate[i],
                     self.gamma[i],
                     self.density_offset[i],
                 ]
@@ -163,12 +178,14 @@ impl<V: Vector> Fluid<V> {
             self.velocity.push(read_vector(&mut next));
             self.acceleration.push(read_vector(&mut next));
             self.earlier_acceleration.push(read_vector(&mut next));
+            self.earliest_acceleration.push(read_vector(&mut next));
             self.grad_gamma.push(read_vector(&mut next));
             self.density.push(read_scalar(&mut next));
             self.mass.push(read_scalar(&mut next));
             self.pressure.push(read_scalar(&mut next));
             self.density_rate.push(read_scalar(&mut next));
             self.earlier_density_rate.push(read_scalar(&mut next));
+            self.earliest_density_rate.push(read_scalar(&mut next));
             self.gamma.push(read_scalar(&mut next));
             self.density_offset.push(read_scalar(&mut next));
         }

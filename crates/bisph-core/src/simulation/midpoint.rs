@@ -2,9 +2,9 @@
 //! the energy-conserving walls conserve energy.
 //!
 //! Per step, with the neighbour grid and the positions frozen at `r^n`, and as the first guess
-//! `(a, rhodot)` the converged rates of the last two steps (at `t^{n-1/2}`, `t^{n-3/2}`)
-//! extrapolated linearly to `t^{n+1/2}` (the last step's rates alone on the first two steps),
-//! iterate:
+//! `(a, rhodot)` the converged rates of the last three steps (at `t^{n-1/2}`, `t^{n-3/2}`,
+//! `t^{n-5/2}`) extrapolated to `t^{n+1/2}` by the parabola through them (the line through
+//! the last two on the third step, the last step's rates alone on the first two), iterate:
 //! 1. midpoint state `u^{n+1/2} = u^n + dt/2 a`, `rho^{n+1/2} = rho^n + dt/2 rhodot`, wall
 //!    velocities at `t^{n+1/2}`;
 //! 2. new rates `(a', rhodot')` at that state;
@@ -263,35 +263,49 @@ impl<V: Vector> Simulation<V> {
         self.fluid.density_rate = density_rate;
     }
 
-    /// First guess of the rates at `t^{n+1/2}`: linear extrapolation from the converged
-    /// rates of the last two steps (at `t^{n-1/2}` and `t^{n-3/2}`); keeps the rates of the
-    /// last step as the earlier ones for the next step.
+    /// First guess of the rates at `t^{n+1/2}`: the converged rates of the last three steps
+    /// (at `t^{n-1/2}`, `t^{n-3/2}`, `t^{n-5/2}`) extrapolated by the parabola through them
+    /// ([`FirstGuess`]), by the line through the last two while fewer are held; keeps the
+    /// rates of the last two steps as the earlier and earliest ones for the next step.
     fn extrapolate_rates(&mut self, dt: f64) {
         let f = &mut self.fluid;
         let n = f.len();
-        let held = self.earlier_dt > 0.0 && f.earlier_acceleration.len() == n;
-        if held {
-            let ratio = (dt + self.last_dt) / (self.last_dt + self.earlier_dt);
+        let earlier = self.earlier_dt > 0.0 && f.earlier_acceleration.len() == n;
+        if earlier {
+            let earliest = self.earliest_dt > 0.0 && f.earliest_acceleration.len() == n;
+            let guess = FirstGuess::new(
+                dt,
+                self.last_dt,
+                self.earlier_dt,
+                earliest.then_some(self.earliest_dt),
+            );
+            f.earliest_acceleration.resize(n, V::ZERO);
+            f.earliest_density_rate.resize(n, 0.0);
             f.acceleration
                 .par_iter_mut()
                 .zip(f.earlier_acceleration.par_iter_mut())
-                .for_each(|(a, e)| {
+                .zip(f.earliest_acceleration.par_iter_mut())
+                .for_each(|((a, e), ee)| {
                     let last = *a;
-                    *a = last + (last - *e) * ratio;
+                    *a = guess.of(last, *e, *ee);
+                    *ee = *e;
                     *e = last;
                 });
             f.density_rate
                 .par_iter_mut()
                 .zip(f.earlier_density_rate.par_iter_mut())
-                .for_each(|(d, e)| {
+                .zip(f.earliest_density_rate.par_iter_mut())
+                .for_each(|((d, e), ee)| {
                     let last = *d;
-                    *d = last + (last - *e) * ratio;
+                    *d = guess.of(last, *e, *ee);
+                    *ee = *e;
                     *e = last;
                 });
         } else {
             f.earlier_acceleration.clone_from(&f.acceleration);
             f.earlier_density_rate.clone_from(&f.density_rate);
         }
+        self.earliest_dt = if earlier { self.earlier_dt } else { 0.0 };
         self.earlier_dt = self.last_dt;
     }
 
@@ -336,5 +350,96 @@ impl<V: Vector> InnerProduct<V> for MidpointNorm<'_, V> {
             .map(|(i, (a, b))| i * a * b)
             .sum();
         fluid + bodies
+    }
+}
+
+/// The midpoint first guess, extrapolated in Newton's form through the rates `r_0, r_1, r_2`
+/// of the last three steps, each held at its step's midpoint: with `s_0 = (dt + dt_0)/2` the
+/// time from the last midpoint to `t^{n+1/2}`, `s_1 = (dt_0 + dt_1)/2` and
+/// `s_2 = (dt_1 + dt_2)/2` the times between the held midpoints (`dt_0` the last step's size,
+/// `dt_1`, `dt_2` those before), the guess is `r_0 + (r_0 - r_1) (c_1 + c_2) - (r_1 - r_2) c_3`
+/// with `c_1 = s_0/s_1`, `q = s_0 (s_0 + s_1)/(s_1 + s_2)`, `c_2 = q/s_1`, `c_3 = q/s_2`:
+/// `3 r_0 - 3 r_1 + r_2` for steps of one size. Where `r_2` is not held, the line through
+/// `r_0, r_1` (`c_2 = c_3 = 0`).
+#[derive(Clone, Copy, Debug)]
+struct FirstGuess {
+    slope: f64,
+    curvature: f64,
+}
+
+impl FirstGuess {
+    fn new(dt: f64, last_dt: f64, earlier_dt: f64, earliest_dt: Option<f64>) -> Self {
+        let s0 = 0.5 * (dt + last_dt);
+        let s1 = 0.5 * (last_dt + earlier_dt);
+        let c1 = s0 / s1;
+        match earliest_dt {
+            Some(earliest_dt) => {
+                let s2 = 0.5 * (earlier_dt + earliest_dt);
+                let q = s0 * (s0 + s1) / (s1 + s2);
+                FirstGuess {
+                    slope: c1 + q / s1,
+                    curvature: q / s2,
+                }
+            }
+            None => FirstGuess {
+                slope: c1,
+                curvature: 0.0,
+            },
+        }
+    }
+
+    /// The guess from the rates of the last step, the earlier and the earliest.
+    #[inline(always)]
+    fn of<T>(&self, last: T, earlier: T, earliest: T) -> T
+    where
+        T: Copy
+            + std::ops::Sub<Output = T>
+            + std::ops::Add<Output = T>
+            + std::ops::Mul<f64, Output = T>,
+    {
+        if self.curvature == 0.0 {
+            last + (last - earlier) * self.slope
+        } else {
+            last + (last - earlier) * self.slope - (earlier - earliest) * self.curvature
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FirstGuess;
+
+    /// The rates sampled at the midpoints of steps `dt_2, dt_1, dt_0` and extrapolated to the
+    /// midpoint of the step `dt` that follows them.
+    fn extrapolate(rate: impl Fn(f64) -> f64, dt: f64, steps: [f64; 3], quadratic: bool) -> f64 {
+        let [dt0, dt1, dt2] = steps;
+        let (t0, t1, t2) = (-0.5 * dt0, -dt0 - 0.5 * dt1, -dt0 - dt1 - 0.5 * dt2);
+        let guess = FirstGuess::new(dt, dt0, dt1, quadratic.then_some(dt2));
+        guess.of(rate(t0), rate(t1), rate(t2))
+    }
+
+    #[test]
+    fn steps_of_one_size_give_three_three_one() {
+        let g = FirstGuess::new(0.5, 0.5, 0.5, Some(0.5));
+        assert_eq!((g.slope, g.curvature), (2.0, 1.0));
+        assert_eq!(g.of(5.0, 2.0, 1.0), 3.0 * 5.0 - 3.0 * 2.0 + 1.0);
+    }
+
+    #[test]
+    fn the_parabola_through_three_midpoints_is_exact_for_uneven_steps() {
+        let parabola = |t: f64| 2.0 - 3.0 * t + 7.0 * t * t;
+        let (dt, steps) = (1.3e-3, [1.1e-3, 0.9e-3, 1.2e-3]);
+        let guess = extrapolate(parabola, dt, steps, true);
+        let exact = parabola(0.5 * dt);
+        assert!(
+            (guess - exact).abs() <= 1e-14 * exact.abs(),
+            "{guess} against {exact}"
+        );
+        // The line through the last two misses the curvature.
+        let line = extrapolate(parabola, dt, steps, false);
+        assert!((line - exact).abs() > 1e-6);
+        let straight = |t: f64| 2.0 - 3.0 * t;
+        let line = extrapolate(straight, dt, steps, false);
+        assert!((line - straight(0.5 * dt)).abs() <= 1e-14 * 2.0);
     }
 }

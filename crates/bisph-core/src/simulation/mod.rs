@@ -249,6 +249,8 @@ pub struct Simulation<V: Vector> {
     pub last_dt: f64,
     /// Size of the step whose rates are in `fluid.earlier_acceleration` (0: none held).
     pub earlier_dt: f64,
+    /// Size of the step whose rates are in `fluid.earliest_acceleration` (0: none held).
+    pub earliest_dt: f64,
     /// Cumulative work of the fluid on walls, `int sum_j F_j . U_j dt`.
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
@@ -325,6 +327,7 @@ impl<V: Vector> Simulation<V> {
             step: 0,
             last_dt: 0.0,
             earlier_dt: 0.0,
+            earliest_dt: 0.0,
             wall_work: 0.0,
             wall_power: 0.0,
             viscous_dissipation: 0.0,
@@ -409,6 +412,7 @@ impl<V: Vector> Simulation<V> {
             step: whole.step,
             last_dt: whole.last_dt,
             earlier_dt: whole.earlier_dt,
+            earliest_dt: whole.earliest_dt,
             wall_work: whole.wall_work,
             wall_power: whole.wall_power,
             viscous_dissipation: whole.viscous_dissipation,
@@ -644,6 +648,7 @@ impl<V: Vector> Simulation<V> {
     /// hand, e.g. to set an initial velocity field).
     pub fn refresh_rates(&mut self) {
         self.earlier_dt = 0.0;
+        self.earliest_dt = 0.0;
         self.stage_state(0.0);
         self.evaluate_rates();
         self.store_body_accelerations(true);

@@ -40,20 +40,23 @@ use std::path::{Path, PathBuf};
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"BISPHCKP";
 /// Version of the binary layout.
-/// (9: the particles removed as they left the domain and their energy, a tenth energy
+/// (10: the midpoint first guess's earliest rates and step; 9: the particles removed as
+/// they left the domain and their energy, a tenth energy
 /// column; 8: the density diffusion's energy books, a ninth energy column; 7: a settling stage
 /// part-way; 6: the positions the explicit scheme's Verlet list was
 /// built at; 5: the midpoint first
 /// guess's earlier rates and step; 4: free rigid bodies and their CSV lengths; 3: without
 /// them).
-pub const FORMAT_VERSION: u32 = 9;
+pub const FORMAT_VERSION: u32 = 10;
 /// Oldest layout still read: format 4 is format 5 without the earlier rates, so a run written
 /// by it resumes with the first guess of a fresh start (last rates) for its first two steps;
 /// format 5 is format 6 without the Verlet list's build positions, so an explicit run with a
 /// skin written by it builds its list afresh at its first step; format 6 is format 7 without
 /// the settling stage (it was never written before `t = 0`); format 7 is format 8 without the
 /// density diffusion's books, which resume at zero (the energy rows read it as zero); format 8
-/// is format 9 without removed particles (none had left the domain: that stopped the run).
+/// is format 9 without removed particles (none had left the domain: that stopped the run);
+/// format 9 is format 10 without the midpoint first guess's earliest rates, so a midpoint run
+/// written by it extrapolates along a line at its first step.
 pub const OLDEST_FORMAT_READ: u32 = 4;
 /// The bisph version written into (and required of) every checkpoint.
 pub const BISPH_VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -141,6 +144,8 @@ pub struct SimState<V: Vector> {
     pub last_dt: f64,
     /// Size of the step before the last (the midpoint first guess's earlier rates).
     pub earlier_dt: f64,
+    /// Size of the step before that (the midpoint first guess's earliest rates).
+    pub earliest_dt: f64,
     /// Cumulative wall work.
     pub wall_work: f64,
     /// Wall power at the last rate evaluation.
@@ -259,6 +264,7 @@ impl<V: Vector> SimState<V> {
         self.step = sim.step;
         self.last_dt = sim.last_dt;
         self.earlier_dt = sim.earlier_dt;
+        self.earliest_dt = sim.earliest_dt;
         self.wall_work = sim.wall_work;
         self.wall_power = sim.wall_power;
         self.viscous_dissipation = sim.viscous_dissipation;
@@ -284,6 +290,8 @@ impl<V: Vector> SimState<V> {
         d.density_rate.clone_from(&s.density_rate);
         d.earlier_acceleration.clone_from(&s.earlier_acceleration);
         d.earlier_density_rate.clone_from(&s.earlier_density_rate);
+        d.earliest_acceleration.clone_from(&s.earliest_acceleration);
+        d.earliest_density_rate.clone_from(&s.earliest_density_rate);
         d.gamma.clone_from(&s.gamma);
         d.grad_gamma.clone_from(&s.grad_gamma);
         d.density_offset.clone_from(&s.density_offset);
@@ -373,9 +381,14 @@ impl<V: Vector> SimState<V> {
         ]
         .iter()
         .any(|&k| k != n)
-            || [f.earlier_acceleration.len(), f.earlier_density_rate.len()]
-                .iter()
-                .any(|&k| k != n && k != 0)
+            || [
+                f.earlier_acceleration.len(),
+                f.earlier_density_rate.len(),
+                f.earliest_acceleration.len(),
+                f.earliest_density_rate.len(),
+            ]
+            .iter()
+            .any(|&k| k != n && k != 0)
         {
             return Err("fluid arrays of different lengths".into());
         }
@@ -450,6 +463,8 @@ impl<V: Vector> SimState<V> {
             && finite(&f.density_rate)
             && finite_v(&f.earlier_acceleration)
             && finite(&f.earlier_density_rate)
+            && finite_v(&f.earliest_acceleration)
+            && finite(&f.earliest_density_rate)
             && finite(&f.gamma)
             && finite_v(&f.grad_gamma)
             && finite(&f.density_offset)
@@ -518,6 +533,7 @@ impl<V: Vector> SimState<V> {
                 self.time,
                 self.last_dt,
                 self.earlier_dt,
+                self.earliest_dt,
                 self.wall_work,
                 self.wall_power,
                 self.viscous_dissipation,
@@ -620,6 +636,7 @@ impl<V: Vector> SimState<V> {
         sim.step = self.step;
         sim.last_dt = self.last_dt;
         sim.earlier_dt = self.earlier_dt;
+        sim.earliest_dt = self.earliest_dt;
         sim.wall_work = self.wall_work;
         sim.wall_power = self.wall_power;
         sim.viscous_dissipation = self.viscous_dissipation;
@@ -650,6 +667,8 @@ impl<V: Vector> SimState<V> {
         d.density_rate.clone_from(&f.density_rate);
         d.earlier_acceleration.clone_from(&f.earlier_acceleration);
         d.earlier_density_rate.clone_from(&f.earlier_density_rate);
+        d.earliest_acceleration.clone_from(&f.earliest_acceleration);
+        d.earliest_density_rate.clone_from(&f.earliest_density_rate);
         d.gamma.clone_from(&f.gamma);
         d.grad_gamma.clone_from(&f.grad_gamma);
         d.density_offset.clone_from(&f.density_offset);
@@ -1035,6 +1054,11 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
         w.u64(s.removed);
         w.f64(s.removed_energy);
     }
+    if format >= 10 {
+        w.f64(s.earliest_dt);
+        w.vectors(&f.earliest_acceleration);
+        w.f64s(&f.earliest_density_rate);
+    }
     w.0
 }
 
@@ -1087,6 +1111,7 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         } else {
             Vec::new()
         },
+        ..Fluid::default()
     };
     if has_neighbour_origin {
         s.neighbour_origin = r.vectors()?;
@@ -1178,6 +1203,11 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
     if format >= 9 {
         s.removed = r.u64()?;
         s.removed_energy = r.f64()?;
+    }
+    if format >= 10 {
+        s.earliest_dt = r.f64()?;
+        s.fluid.earliest_acceleration = r.vectors()?;
+        s.fluid.earliest_density_rate = r.f64s()?;
     }
     if r.at != bytes.len() {
         return Err(format!(
@@ -1390,7 +1420,7 @@ mod tests {
         assert!(matches!(e, CheckpointError::Foreign { .. }), "{e}");
         assert!(
             e.to_string()
-                .contains("checkpoint format 3, this bisph reads formats 4 to 9"),
+                .contains("checkpoint format 3, this bisph reads formats 4 to 10"),
             "{e}"
         );
     }
@@ -1415,6 +1445,30 @@ mod tests {
             row[ENERGY_COLUMNS - 2] = 0.0;
         }
         c
+    }
+
+    #[test]
+    fn format_9_reads_without_the_earliest_rates() {
+        let mut c = sample();
+        let f = &mut c.sim.fluid;
+        f.earlier_acceleration = f.acceleration.clone();
+        f.earlier_density_rate = f.density_rate.clone();
+        f.earliest_acceleration = f.velocity.clone();
+        f.earliest_density_rate = f.pressure.clone();
+        (c.sim.earlier_dt, c.sim.earliest_dt) = (1e-3, 2e-3);
+        let whole = decode::<DVec2>(Path::new("v10.bin"), &encode(&c)).unwrap();
+        assert_eq!(whole.sim.earliest_dt, 2e-3);
+        assert_eq!(whole.sim.fluid.earliest_acceleration, c.sim.fluid.velocity);
+        assert_eq!(encode(&whole), encode(&c));
+        let back = decode::<DVec2>(Path::new("v9.bin"), &encode_format(&c, 9)).unwrap();
+        assert_eq!(back.sim.earlier_dt, 1e-3);
+        assert_eq!(back.sim.earliest_dt, 0.0);
+        assert!(back.sim.fluid.earliest_acceleration.is_empty());
+        assert!(back.sim.fluid.earliest_density_rate.is_empty());
+        c.sim.earliest_dt = 0.0;
+        c.sim.fluid.earliest_acceleration.clear();
+        c.sim.fluid.earliest_density_rate.clear();
+        assert_eq!(encode(&back), encode(&c));
     }
 
     #[test]
