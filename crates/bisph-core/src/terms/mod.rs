@@ -11,6 +11,7 @@
 //! - continuity, paper 1 eq 1: `drho_i/dt = -rho_i (<div u>_i^Omega + <div u>_i^{dOmega}) + D_i`.
 
 pub mod density_diffusion;
+mod lanes;
 pub mod pressure_gradient;
 pub mod velocity_divergence;
 pub mod viscosity;
@@ -292,8 +293,10 @@ impl<V: Vector> Accumulator<V> for FluidSums<V> {
 }
 
 /// The pressure-gradient and divergence sums alone, for sweeps with no other term on
-/// (density diffusion, viscosity and the discrete Shepard sum off).
+/// (density diffusion, viscosity and the discrete Shepard sum off); laid out as its fields
+/// for [`lanes`].
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 struct GradientSums<V> {
     grad_p: V,
     div_u: f64,
@@ -318,8 +321,9 @@ impl<V: Vector> Accumulator<V> for GradientSums<V> {
     }
 }
 
-/// What the pair terms read of one particle.
+/// What the pair terms read of one particle, laid out as its fields for [`lanes`].
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 struct Side<V> {
     u: V,
     rho: f64,
@@ -576,7 +580,17 @@ fn scattered_sums<
     let sides = &buffers.sides[..];
     if buffers.gradient_only {
         let sums = zeroed(&mut buffers.gradient_sums, n, GradientSums::ZERO);
-        sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, fluid, sides, neighbours, sums);
+        let in_lanes = match neighbours {
+            Scattered::Listed(listed) if !WEIGHTED => {
+                lanes::sweep_listed_gradients(sides, listed, sums)
+            }
+            _ => false,
+        };
+        if !in_lanes {
+            sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                model, fluid, sides, neighbours, sums,
+            );
+        }
     } else {
         let sums = zeroed(&mut buffers.sums, n, FluidSums::ZERO);
         sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, fluid, sides, neighbours, sums);
