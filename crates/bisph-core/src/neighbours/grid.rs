@@ -646,8 +646,8 @@ pub(super) fn one_at_a_time<V: Copy>(
     }
 }
 
-/// Candidates filtered per block.
-pub(super) const KEPT_BLOCK: usize = 32;
+/// Candidates filtered per block: the longest run of partners a filtered sweep visits at once.
+pub const KEPT_BLOCK: usize = 32;
 
 /// The buffers of the branch-free block filter of the neighbour searches (896 bytes in
 /// 2-D): a sweep makes one per task and passes it to every query, since clearing them per

@@ -32,5 +32,7 @@ mod pair_blocks;
 
 pub use candidate_rows::{CandidateRows, Nearby};
 
-pub use grid::{CellGrid, KeptBlock, PairList, Periodicity};
-pub use pair_blocks::{renumbering, ListedPairs, Listing, PairBlocks, RunValues, GONE};
+pub use grid::{CellGrid, KeptBlock, PairList, Periodicity, KEPT_BLOCK};
+pub use pair_blocks::{
+    renumbering, single_precision, ListedPairs, Listing, PairBlocks, RunValues, GONE,
+};

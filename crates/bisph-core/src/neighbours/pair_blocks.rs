@@ -272,12 +272,18 @@ impl<V: Vector> PairBlocks<V> {
         assert!(points.len() >= self.len(), "fewer points than listed");
         let r2max = radius * radius;
         let period = self.period;
-        sweep_classes(&self.classes, self.len(), values, |chunk, shared, kept| {
-            chunk.sweep(points, r2max, &period, kept, |i, index, r_ij, r2| {
-                let mut run = RunValues { shared, i, index };
-                visit(i, &mut run, index, r_ij, r2);
-            });
-        });
+        sweep_classes(
+            &self.classes,
+            self.len(),
+            values,
+            KeptBlock::new,
+            |chunk, shared, kept| {
+                chunk.sweep(points, r2max, &period, kept, |i, index, r_ij, r2| {
+                    let mut run = RunValues { shared, i, index };
+                    visit(i, &mut run, index, r_ij, r2);
+                });
+            },
+        );
     }
 
     /// Lists into `listed` the pairs within `radius` at the positions `points` (none farther
@@ -314,17 +320,19 @@ pub enum Listing {
     #[default]
     OffsetAndFactor,
     /// The product `r_ij F(|r_ij|)` alone (the kernel gradient, with `F` the kernel
-    /// gradient factor), for sums that read nothing else of a pair: 8 bytes less per pair.
+    /// gradient factor), rounded once to single precision, for sums that read nothing else
+    /// of a pair: 16 bytes per pair in 3-D instead of 36. Both particles of a pair read the
+    /// same rounded gradient, so the pair terms stay antisymmetric (momentum) and the
+    /// gradient and divergence stay adjoint (the energy balance of the midpoint scheme).
     Product,
 }
 
 impl Listing {
     /// Bytes stored per pair.
-    pub fn pair_bytes<V>(self) -> usize {
-        let vector = std::mem::size_of::<V>();
+    pub fn pair_bytes<V: Vector>(self) -> usize {
         match self {
-            Listing::OffsetAndFactor => 4 + vector + 8,
-            Listing::Product => 4 + vector,
+            Listing::OffsetAndFactor => 4 + std::mem::size_of::<V>() + 8,
+            Listing::Product => 4 + 4 * V::DIM,
         }
     }
 }
@@ -332,7 +340,7 @@ impl Listing {
 /// The pairs of a [`PairBlocks`] within a radius at fixed positions (the iterations of a
 /// midpoint step), each with its `r_ij` and a per-pair factor (the kernel gradient factor
 /// for the fluid sums) or with their product ([`Listing`]): the blocks' rows and order
-/// without the filter. [`Listing::pair_bytes`] per pair (36 or 28 in 3-D); the buffers are
+/// without the filter. [`Listing::pair_bytes`] per pair (36 or 16 in 3-D); the buffers are
 /// kept between listings.
 #[derive(Clone, Debug, Default)]
 pub struct ListedPairs<V> {
@@ -347,11 +355,28 @@ struct ListedChunk<V> {
     first: Vec<u32>,
     start: Vec<u32>,
     second: Vec<u32>,
-    /// `r_ij`, or `r_ij F(|r_ij|)` under [`Listing::Product`].
+    /// `r_ij`; empty under [`Listing::Product`].
     offset: Vec<V>,
     /// `F(|r_ij|)`; empty under [`Listing::Product`].
     factor: Vec<f64>,
+    /// Under [`Listing::Product`], the components of `r_ij F(|r_ij|)` in single precision,
+    /// `DIM` per pair, then [`GRADIENT_PADDING`] zeros (so that a 16-byte load of the last
+    /// pair's components stays within the buffer); else empty.
+    gradient: Vec<f32>,
 }
+
+/// `v` with each component rounded once to single precision, as [`Listing::Product`] stores
+/// the kernel gradients (widened back exactly).
+#[inline(always)]
+pub fn single_precision<V: Vector>(mut v: V) -> V {
+    for k in 0..V::DIM {
+        v.set(k, f64::from(v.get(k) as f32));
+    }
+    v
+}
+
+/// Zeros after the last pair's single-precision gradient in a [`ListedChunk`].
+const GRADIENT_PADDING: usize = 4;
 
 impl<V: Vector> ListedPairs<V> {
     /// What is listed with each pair.
@@ -366,8 +391,8 @@ impl<V: Vector> ListedPairs<V> {
 
     /// [`PairBlocks::sweep`] over the listed pairs: `visit(i, values, index, r_ij, factor)`
     /// for each row, with the same pairs in the same order as the blocks' sweep at the
-    /// positions of the listing; under [`Listing::Product`], `r_ij` holds the products and
-    /// `factor` is empty.
+    /// positions of the listing; under [`Listing::Product`], `r_ij` holds the products (the
+    /// single-precision gradients widened) and `factor` is empty.
     ///
     /// # Panics
     /// When `values` holds fewer entries than the list's points.
@@ -380,14 +405,65 @@ impl<V: Vector> ListedPairs<V> {
             &self.classes,
             self.len,
             values,
-            |chunk, shared, _: &mut KeptBlock<V>| {
+            Vec::new,
+            |chunk, shared, widened: &mut Vec<V>| {
                 for (r, &i) in chunk.first.iter().enumerate() {
                     let (s, e) = (chunk.start[r] as usize, chunk.start[r + 1] as usize);
                     let index = &chunk.second[s..e];
                     let i = i as usize;
                     let mut run = RunValues { shared, i, index };
-                    let factor = chunk.factor.get(s..e).unwrap_or_default();
-                    visit(i, &mut run, index, &chunk.offset[s..e], factor);
+                    if self.listing == Listing::Product {
+                        let d = V::DIM;
+                        let single = &chunk.gradient[d * s..d * e];
+                        widened.clear();
+                        widened.extend(single.chunks_exact(d).map(|g| {
+                            let mut v = V::ZERO;
+                            for (k, &c) in g.iter().enumerate() {
+                                v.set(k, f64::from(c));
+                            }
+                            v
+                        }));
+                        visit(i, &mut run, index, &widened[..], &[]);
+                    } else {
+                        visit(i, &mut run, index, &chunk.offset[s..e], &chunk.factor[s..e]);
+                    }
+                }
+            },
+        );
+    }
+
+    /// The sweep of [`ListedPairs::sweep`] over a list of [`Listing::Product`], with the
+    /// single-precision gradients as they are stored: `visit(i, values, index, gradient)`,
+    /// `gradient` pointing to the `DIM` components of the run's first pair, those of the
+    /// others following, and [`GRADIENT_PADDING`] readable values after the run's last.
+    ///
+    /// # Panics
+    /// When the list is not of [`Listing::Product`], or `values` holds fewer entries than
+    /// the list's points.
+    pub fn sweep_single<T: Send>(
+        &self,
+        values: &mut [T],
+        visit: impl Fn(usize, &mut RunValues<'_, T>, &[u32], *const f32) + Sync,
+    ) {
+        assert_eq!(
+            self.listing,
+            Listing::Product,
+            "no single-precision gradients"
+        );
+        sweep_classes(
+            &self.classes,
+            self.len,
+            values,
+            || (),
+            |chunk, shared, _: &mut ()| {
+                for (r, &i) in chunk.first.iter().enumerate() {
+                    let (s, e) = (chunk.start[r] as usize, chunk.start[r + 1] as usize);
+                    let index = &chunk.second[s..e];
+                    let i = i as usize;
+                    let mut run = RunValues { shared, i, index };
+                    // In range: the padding follows the last pair.
+                    let gradient = chunk.gradient[V::DIM * s..].as_ptr();
+                    visit(i, &mut run, index, gradient);
                 }
             },
         );
@@ -411,6 +487,7 @@ impl<V: Vector> ListedChunk<V> {
         self.second.clear();
         self.offset.clear();
         self.factor.clear();
+        self.gradient.clear();
         self.start.push(0);
         from.sweep(points, r2max, period, kept, |i, index, r_ij, r2| {
             // A row's runs come one after the other; rows have distinct first particles.
@@ -424,24 +501,35 @@ impl<V: Vector> ListedChunk<V> {
                     self.offset.extend_from_slice(r_ij);
                     self.factor.extend(r2.iter().map(|&r2| factor(r2.sqrt())));
                 }
-                Listing::Product => self.offset.extend(
-                    r_ij.iter()
-                        .zip(r2)
-                        .map(|(&r_ij, &r2)| r_ij * factor(r2.sqrt())),
-                ),
+                Listing::Product => {
+                    let start = self.gradient.len();
+                    self.gradient.resize(start + V::DIM * r_ij.len(), 0.0);
+                    let to = self.gradient[start..].chunks_exact_mut(V::DIM);
+                    for (to, (&r_ij, &r2)) in to.zip(r_ij.iter().zip(r2)) {
+                        let g = r_ij * factor(r2.sqrt());
+                        for (k, c) in to.iter_mut().enumerate() {
+                            *c = g.get(k) as f32;
+                        }
+                    }
+                }
             }
             *self.start.last_mut().unwrap() = self.second.len() as u32;
         });
+        if listing == Listing::Product {
+            self.gradient.extend([0.0; GRADIENT_PADDING]);
+        }
     }
 }
 
 /// Sweeps `classes` one after the other, the chunks of a class in parallel, each with
-/// `sweep(chunk, values, kept)`; `values` must hold at least `len` entries.
-fn sweep_classes<V: Vector, C: Sync, T: Send>(
+/// `sweep(chunk, values, scratch)`, `scratch` made by `init` once per task; `values` must
+/// hold at least `len` entries.
+fn sweep_classes<C: Sync, T: Send, S>(
     classes: &[Vec<C>],
     len: usize,
     values: &mut [T],
-    sweep: impl Fn(&C, &SharedValues<T>, &mut KeptBlock<V>) + Sync,
+    init: impl Fn() -> S + Sync + Send,
+    sweep: impl Fn(&C, &SharedValues<T>, &mut S) + Sync,
 ) {
     assert!(values.len() >= len, "fewer values than listed points");
     let shared = SharedValues {
@@ -450,7 +538,7 @@ fn sweep_classes<V: Vector, C: Sync, T: Send>(
     for class in classes {
         class
             .par_iter()
-            .for_each_init(KeptBlock::new, |kept, chunk| sweep(chunk, &shared, kept));
+            .for_each_init(&init, |scratch, chunk| sweep(chunk, &shared, scratch));
     }
 }
 
@@ -682,14 +770,19 @@ mod tests {
             }
         });
         assert_eq!(again, order);
-        // Their products alone: the same pairs again, `r_ij F` to the bit.
+        // Their products alone: the same pairs again, `r_ij F` rounded once to single
+        // precision, to the bit.
         list.list(at, radius, factor, Listing::Product, &mut listed);
         let mut products = vec![Vec::new(); at.len()];
         listed.sweep(&mut products, |i, run, index, product, f| {
             assert!(f.is_empty());
             for (k, &j) in index.iter().enumerate() {
                 let expected = period.minimum_image(at[j as usize] - at[i]);
-                assert_eq!(product[k], expected * factor(expected.length()));
+                let exact = expected * factor(expected.length());
+                let single: Vec<f64> = (0..V::DIM)
+                    .map(|c| f64::from(exact.get(c) as f32))
+                    .collect();
+                assert_eq!(product[k], V::from_slice(&single));
                 run.first().push(keys[j as usize]);
                 run.partner(k).push(keys[i]);
             }

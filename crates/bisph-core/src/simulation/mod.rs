@@ -919,10 +919,11 @@ impl<V: Vector> Simulation<V> {
     /// Freezes the fluid pairs at the current positions for the rate evaluations until
     /// [`Simulation::forget_pairs`] (the iterations of a midpoint step, whose positions and
     /// grid are frozen): the Verlet list's pairs while it holds, else those within the
-    /// support from the cell grid; listed with their offsets and kernel gradient factors
-    /// unless the listed pairs would take more than [`SimConfig::pair_list_budget`] bytes
-    /// (estimated from the particle spacing, 25% over a lattice), filtered at each evaluation
-    /// otherwise, with the same bits.
+    /// support from the cell grid; listed with their offsets and kernel gradient factors, or
+    /// their kernel gradients alone in single precision ([`Listing::Product`]), unless the
+    /// listed pairs would take more than [`SimConfig::pair_list_budget`] bytes (estimated from
+    /// the particle spacing, 25% over a lattice), filtered at each evaluation otherwise
+    /// ([`FluidNeighbours::FrozenPairs`]), with the same bits.
     pub(crate) fn list_pairs(&mut self) {
         let start = Instant::now();
         let kernel = self.config.kernel;
@@ -1046,7 +1047,9 @@ impl<V: Vector> Simulation<V> {
         let (grid, walls) = (&self.fluid_grid, &mut self.walls);
         let neighbours = if self.scratch.pairs_listed {
             FluidNeighbours::Listed(&self.scratch.pairs)
-        } else if self.scratch.use_candidates || self.scratch.pairs_frozen {
+        } else if self.scratch.pairs_frozen {
+            FluidNeighbours::FrozenPairs(&self.scratch.candidates)
+        } else if self.scratch.use_candidates {
             FluidNeighbours::Pairs(&self.scratch.candidates)
         } else {
             FluidNeighbours::Grid(grid)

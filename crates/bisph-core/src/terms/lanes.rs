@@ -1,9 +1,10 @@
 //! The listed sweep of the pressure gradient and the velocity divergence in 3-D (paper 1,
 //! eqs 10-11, each pair once for both particles) with the four components of a pair's share
 //! (`grad p` and `div u`) in the four lanes of one AVX2 register, on processors that have
-//! AVX2 (checked at run time). Every lane performs the operations of [`super::pair_shares`]
-//! on its component, in its order (the dot product's terms are added left to right), and no
-//! multiply-add is fused: the sums have the bits of the scalar sweep.
+//! AVX2 (checked at run time). The single-precision kernel gradients of the list are widened
+//! exactly, as the scalar sweep widens them; every lane performs the operations of
+//! [`super::pair_shares`] on its component, in its order (the dot product's terms are added
+//! left to right), and no multiply-add is fused: the sums have the bits of the scalar sweep.
 
 use super::{GradientSums, Side};
 use crate::dim::Vector;
@@ -33,11 +34,12 @@ pub(super) fn sweep_listed_gradients<V: Vector>(
             &mut *(sums as *mut [GradientSums<V>] as *mut [GradientSums<DVec3>]),
         )
     };
-    listed.sweep(sums, |i, run, index, gradient, _| {
+    listed.sweep_single(sums, |i, run, index, gradient| {
         let own = run.first() as *mut GradientSums<DVec3>;
         // SAFETY: AVX2 is present (checked above); `own` and the partners are the run's values
         // (`RunValues`), `i` and `index` index `sides` (the list's points, checked against
-        // `sums`, which has the length of `sides`), and `gradient` has one entry per partner.
+        // `sums`, which has the length of `sides`), and `gradient` holds three components per
+        // partner and the padding after them (`ListedPairs::sweep_single`).
         unsafe { x86::scatter_run(sides, i, own, |k| run.partner(k) as *mut _, index, gradient) }
     });
     true
@@ -59,12 +61,13 @@ mod x86 {
     use glam::DVec3;
     use std::arch::x86_64::*;
 
-    /// The shares of the pairs of `i` with `index[k]` (kernel gradients `gradient[k]`) added
-    /// to `own` (summed in a register over the run) and to `partner(k)`.
+    /// The shares of the pairs of `i` with `index[k]` (kernel gradients at `gradient[3 k..]`,
+    /// single precision) added to `own` (summed in a register over the run) and to
+    /// `partner(k)`.
     ///
     /// # Safety
     /// The processor has AVX2; `own` and every `partner(k)` point to distinct valid sums;
-    /// `i` and every `index[k]` index `sides`; `gradient` has the length of `index`.
+    /// `i` and every `index[k]` index `sides`; `gradient` is readable for `3 len + 1` values.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn scatter_run(
         sides: &[Side<DVec3>],
@@ -72,7 +75,7 @@ mod x86 {
         own: *mut GradientSums<DVec3>,
         mut partner: impl FnMut(usize) -> *mut GradientSums<DVec3>,
         index: &[u32],
-        gradient: &[DVec3],
+        gradient: *const f32,
     ) {
         let side = |j: usize| sides.as_ptr().add(j) as *const f64;
         // Lanes (x, y, z, density) of the velocity row, then (pressure, volume).
@@ -81,16 +84,13 @@ mod x86 {
         let (p_a, volume_a) = (*a.add(4), *a.add(5));
         let volume_a4 = _mm256_set1_pd(volume_a);
         let sign = _mm_set_sd(-0.0);
+        let zero = _mm256_setzero_pd();
         let mut sum_own = _mm256_loadu_pd(own as *const f64);
         for (k, &j) in index.iter().enumerate() {
             let b = side(j as usize);
-            // (x, y) and z: a masked load of the three costs more on some processors.
-            let g_k = gradient.as_ptr().add(k) as *const f64;
-            let g = _mm256_insertf128_pd(
-                _mm256_castpd128_pd256(_mm_loadu_pd(g_k)),
-                _mm_load_sd(g_k.add(2)),
-                1,
-            );
+            // (x, y, z) widened, the fourth value (the next pair's, or padding) cleared.
+            let g4 = _mm256_cvtps_pd(_mm_loadu_ps(gradient.add(3 * k)));
+            let g = _mm256_blend_pd(g4, zero, 0b1000);
             let (p_b, volume_b) = (*b.add(4), *b.add(5));
             // q = -((u_b - u_a) . g), its terms added x, y, then z.
             let product = _mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(b), u_a), g);
@@ -125,7 +125,7 @@ mod x86 {
         _: *mut GradientSums<DVec3>,
         _: impl FnMut(usize) -> *mut GradientSums<DVec3>,
         _: &[u32],
-        _: &[DVec3],
+        _: *const f32,
     ) {
         unreachable!("the lanes need AVX2")
     }

@@ -18,7 +18,10 @@ pub mod viscosity;
 
 use crate::dim::Vector;
 use crate::kernel::Wendland;
-use crate::neighbours::{CellGrid, KeptBlock, ListedPairs, Listing, Nearby, PairBlocks, RunValues};
+use crate::neighbours::{
+    single_precision, CellGrid, KeptBlock, ListedPairs, Listing, Nearby, PairBlocks, RunValues,
+    KEPT_BLOCK,
+};
 use crate::particles::FluidState;
 use crate::walls::{BoundaryElements, ParticleView, WallModel};
 pub use density_diffusion::{DensityDiffusion, DiffusionForm};
@@ -67,10 +70,15 @@ pub enum FluidNeighbours<'a, V: Vector> {
     /// it is the minimum image).
     Pairs(&'a PairBlocks<V>),
     /// The pairs of a [`PairBlocks`] listed with their offsets and kernel gradient factors, or
-    /// with their kernel gradients alone ([`pair_listing`]), at frozen positions (the
-    /// iterations of a midpoint step): the sums of [`FluidNeighbours::Pairs`] at those
-    /// positions, to the bit.
+    /// with their kernel gradients alone ([`pair_listing`]) in single precision, at frozen
+    /// positions (the iterations of a midpoint step): the sums of
+    /// [`FluidNeighbours::FrozenPairs`] at those positions, to the bit.
     Listed(&'a ListedPairs<V>),
+    /// The pairs of [`FluidNeighbours::Listed`] filtered from the Verlet list at every
+    /// evaluation, where their listing would take too much memory: the same pairs and order,
+    /// and, where the sums read only the kernel gradients, those rounded to single precision
+    /// as the listing rounds them.
+    FrozenPairs(&'a PairBlocks<V>),
 }
 
 /// What the sweep needs besides the state.
@@ -515,10 +523,14 @@ fn scatter_run<
     *run.first() = own;
 }
 
-/// The pairs of a scatter: a Verlet list filtered at the positions, or its listed pairs.
+/// The pairs of a scatter: a Verlet list filtered at the positions (with the kernel
+/// gradients rounded as [`Listing::Product`] rounds them when `round`), or its listed pairs.
 #[derive(Clone, Copy)]
 enum Scattered<'a, V> {
-    Filtered(&'a PairBlocks<V>),
+    Filtered {
+        pairs: &'a PairBlocks<V>,
+        round: bool,
+    },
     Listed(&'a ListedPairs<V>),
 }
 
@@ -624,7 +636,31 @@ fn sweep_into<
 ) {
     let kernel = &model.kernel;
     match neighbours {
-        Scattered::Filtered(pairs) => pairs.sweep(
+        // The kernel gradients of a listing, rounded as it rounds them.
+        Scattered::Filtered { pairs, round }
+            if round && !sums_need_distances(DIFFUSE, VISCID, SHEPARD) =>
+        {
+            pairs.sweep(
+                fluid.position,
+                kernel.support,
+                sums,
+                |i, run, index, r_ij, r2| {
+                    let mut gradient = [V::ZERO; KEPT_BLOCK];
+                    for (g, (&r_ij, &r2)) in gradient.iter_mut().zip(r_ij.iter().zip(r2)) {
+                        *g = single_precision(r_ij * kernel.gradient_factor(r2.sqrt()));
+                    }
+                    scatter_run::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                        model,
+                        sides,
+                        (i, run),
+                        index,
+                        &gradient[..index.len()],
+                        |_| (f64::NAN, 1.0),
+                    )
+                },
+            )
+        }
+        Scattered::Filtered { pairs, .. } => pairs.sweep(
             fluid.position,
             kernel.support,
             sums,
@@ -654,7 +690,7 @@ fn sweep_into<
                     |k| (r_ij[k].length(), factor[k]),
                 )
             }),
-            // The kernel gradients as offsets with a factor of 1: `grad W` to the bit, and no
+            // The single-precision kernel gradients widened, as offsets with a factor of 1: no
             // term reads `|r_ij|` (the NaN would show).
             Listing::Product => {
                 assert!(
@@ -715,7 +751,11 @@ pub fn compute_rates<V: Vector, W: WallModel<V>>(
     let switches = sum_switches(model, wall_model);
     let scattered = match neighbours {
         FluidNeighbours::Grid(_) => None,
-        FluidNeighbours::Pairs(pairs) => Some(Scattered::Filtered(pairs)),
+        FluidNeighbours::Pairs(pairs) => Some(Scattered::Filtered {
+            pairs,
+            round: false,
+        }),
+        FluidNeighbours::FrozenPairs(pairs) => Some(Scattered::Filtered { pairs, round: true }),
         FluidNeighbours::Listed(listed) => Some(Scattered::Listed(listed)),
     };
     if let Some(pairs) = scattered {
