@@ -559,6 +559,13 @@ impl<T> RunValues<'_, T> {
         unsafe { &mut *self.shared.data.add(self.i) }
     }
 
+    /// The values of every point, for a sweep that reaches the run's particle and partners
+    /// through a pointer: only those are this task's to read and write while the run lasts.
+    #[inline(always)]
+    pub fn all(&mut self) -> *mut T {
+        self.shared.data
+    }
+
     /// The value of the run's partner `k`.
     #[inline(always)]
     pub fn partner(&mut self, k: usize) -> &mut T {

@@ -35,12 +35,11 @@ pub(super) fn sweep_listed_gradients<V: Vector>(
         )
     };
     listed.sweep_single(sums, |i, run, index, gradient| {
-        let own = run.first() as *mut GradientSums<DVec3>;
-        // SAFETY: AVX2 is present (checked above); `own` and the partners are the run's values
-        // (`RunValues`), `i` and `index` index `sides` (the list's points, checked against
-        // `sums`, which has the length of `sides`), and `gradient` holds three components per
-        // partner and the padding after them (`ListedPairs::sweep_single`).
-        unsafe { x86::scatter_run(sides, i, own, |k| run.partner(k) as *mut _, index, gradient) }
+        // SAFETY: AVX2 is present (checked above); the run's particle and partners are its
+        // task's alone (`RunValues::all`), `i` and `index` index `sides` (the list's points,
+        // checked against `sums`, which has the length of `sides`), and `gradient` holds three
+        // components per partner and the padding after them (`ListedPairs::sweep_single`).
+        unsafe { x86::scatter_run(sides, i, run.all(), index, gradient) }
     });
     true
 }
@@ -62,54 +61,68 @@ mod x86 {
     use std::arch::x86_64::*;
 
     /// The shares of the pairs of `i` with `index[k]` (kernel gradients at `gradient[3 k..]`,
-    /// single precision) added to `own` (summed in a register over the run) and to
-    /// `partner(k)`.
+    /// single precision) added to `sums[i]` (summed in a register over the run) and to
+    /// `sums[index[k]]`.
+    ///
+    /// Both particles' shares are one register of gradient lanes `(g, d)`, `d = (u_b - u_a) . g`
+    /// in the fourth, times a register of coefficients: `(-(p_a + p_b) V_b, .., -V_b)` for `i`
+    /// and `((p_a + p_b) V_a, .., -V_a)` for the partner. `d (-V) = (-d) V` exactly, so the
+    /// fourth lanes carry the divergence shares `q V` of [`super::super::velocity_divergence`]
+    /// with their bits.
     ///
     /// # Safety
-    /// The processor has AVX2; `own` and every `partner(k)` point to distinct valid sums;
-    /// `i` and every `index[k]` index `sides`; `gradient` is readable for `3 len + 1` values.
+    /// The processor has AVX2; `sums` points to the sums of every particle of `sides`, no
+    /// other task writes those of `i` and of the run's partners; `i` and every `index[k]`
+    /// (none equal to `i`) index `sides`; `gradient` is readable for `3 len + 1` values.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn scatter_run(
         sides: &[Side<DVec3>],
         i: usize,
-        own: *mut GradientSums<DVec3>,
-        mut partner: impl FnMut(usize) -> *mut GradientSums<DVec3>,
+        sums: *mut GradientSums<DVec3>,
         index: &[u32],
         gradient: *const f32,
     ) {
-        let side = |j: usize| sides.as_ptr().add(j) as *const f64;
-        // Lanes (x, y, z, density) of the velocity row, then (pressure, volume).
-        let a = side(i);
+        let sides = sides.as_ptr() as *const f64;
+        let sums = sums as *mut f64;
+        // A side is 6 values: (x, y, z, density) of the velocity row, then (pressure, volume);
+        // a particle's sums 4: (grad p, div u).
+        let a = sides.add(6 * i);
         let u_a = _mm256_loadu_pd(a);
-        let (p_a, volume_a) = (*a.add(4), *a.add(5));
-        let volume_a4 = _mm256_set1_pd(volume_a);
-        let sign = _mm_set_sd(-0.0);
-        let zero = _mm256_setzero_pd();
-        let mut sum_own = _mm256_loadu_pd(own as *const f64);
-        for (k, &j) in index.iter().enumerate() {
-            let b = side(j as usize);
-            // (x, y, z) widened, the fourth value (the next pair's, or padding) cleared.
-            let g4 = _mm256_cvtps_pd(_mm_loadu_ps(gradient.add(3 * k)));
-            let g = _mm256_blend_pd(g4, zero, 0b1000);
-            let (p_b, volume_b) = (*b.add(4), *b.add(5));
-            // q = -((u_b - u_a) . g), its terms added x, y, then z.
-            let product = _mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(b), u_a), g);
+        let p_a = _mm256_broadcast_sd(&*a.add(4));
+        let volume_a = _mm256_broadcast_sd(&*a.add(5));
+        // The fourth lane of the coefficients, and the sign of their first three for `i`.
+        let minus_one = _mm256_set1_pd(-1.0);
+        let negate_xyz = _mm256_set_pd(0.0, -0.0, -0.0, -0.0);
+        let own = sums.add(4 * i);
+        let mut sum_own = _mm256_loadu_pd(own);
+        let mut g = gradient;
+        for &j in index {
+            let b = sides.add(6 * j as usize);
+            // (x, y, z) widened; the fourth value (the next pair's, or padding) is replaced
+            // below and its product with the density difference is not read.
+            let g4 = _mm256_cvtps_pd(_mm_loadu_ps(g));
+            g = g.add(3);
+            // d = (u_b - u_a) . g, its terms added x, y, then z.
+            let product = _mm256_mul_pd(_mm256_sub_pd(_mm256_loadu_pd(b), u_a), g4);
             let low = _mm256_castpd256_pd128(product);
             let xy = _mm_add_sd(low, _mm_unpackhi_pd(low, low));
-            let dot = _mm_add_sd(xy, _mm256_extractf128_pd(product, 1));
-            let q = _mm256_broadcastsd_pd(_mm_xor_pd(dot, sign));
-            let sum = p_a + p_b;
-            let volume_b4 = _mm256_set1_pd(volume_b);
-            // Lanes (g, q) times (-(p_a + p_b) V_b, V_b) and ((p_a + p_b) V_a, V_a).
-            let gq = _mm256_blend_pd(g, q, 0b1000);
-            let to_own = _mm256_blend_pd(_mm256_set1_pd(-sum * volume_b), volume_b4, 0b1000);
-            let to_partner = _mm256_blend_pd(_mm256_set1_pd(sum * volume_a), volume_a4, 0b1000);
-            sum_own = _mm256_add_pd(sum_own, _mm256_mul_pd(gq, to_own));
-            let sums = partner(k) as *mut f64;
-            let shared = _mm256_add_pd(_mm256_loadu_pd(sums), _mm256_mul_pd(gq, to_partner));
-            _mm256_storeu_pd(sums, shared);
+            let d = _mm_add_sd(xy, _mm256_extractf128_pd(product, 1));
+            let gd = _mm256_blend_pd(g4, _mm256_broadcastsd_pd(d), 0b1000);
+            // (p_a + p_b, .., -1), times V_a for the partner, negated in x, y, z and times V_b
+            // for `i`.
+            let sum = _mm256_add_pd(p_a, _mm256_broadcast_sd(&*b.add(4)));
+            let ones = _mm256_blend_pd(sum, minus_one, 0b1000);
+            let to_partner = _mm256_mul_pd(ones, volume_a);
+            let to_own = _mm256_mul_pd(
+                _mm256_xor_pd(ones, negate_xyz),
+                _mm256_broadcast_sd(&*b.add(5)),
+            );
+            sum_own = _mm256_add_pd(sum_own, _mm256_mul_pd(gd, to_own));
+            let partner = sums.add(4 * j as usize);
+            let shared = _mm256_add_pd(_mm256_loadu_pd(partner), _mm256_mul_pd(gd, to_partner));
+            _mm256_storeu_pd(partner, shared);
         }
-        _mm256_storeu_pd(own as *mut f64, sum_own);
+        _mm256_storeu_pd(own, sum_own);
     }
 }
 
@@ -123,7 +136,6 @@ mod x86 {
         _: &[Side<DVec3>],
         _: usize,
         _: *mut GradientSums<DVec3>,
-        _: impl FnMut(usize) -> *mut GradientSums<DVec3>,
         _: &[u32],
         _: *const f32,
     ) {
