@@ -310,6 +310,23 @@ impl<V: Vector> CellGrid<V> {
         self.row_rank[row] as usize + clamp(c[0], self.dims[0])
     }
 
+    /// The points in the order in which the searches meet them: rows of cells in increasing
+    /// `z`, then `y`, the cells of a row in increasing `x`, a cell's points in their storage
+    /// order. Without periodic axes, a search around any place meets the points near it in
+    /// this order; with them, `None` (a search meets the images across the end first).
+    pub fn points_in_search_order(&self) -> Option<Vec<u32>> {
+        if self.periodic {
+            return None;
+        }
+        let [nx, ny, nz] = self.dims;
+        let mut order = Vec::with_capacity(self.items.len());
+        for row in 0..ny * nz {
+            let (start, end) = self.run_slots(row, 0, nx - 1);
+            order.extend_from_slice(&self.items[start..end]);
+        }
+        Some(order)
+    }
+
     /// Slots `start..end` of the cells `x0..=x1` of row `row` (`cy + ny cz`).
     #[inline(always)]
     fn run_slots(&self, row: usize, x0: usize, x1: usize) -> (usize, usize) {
@@ -727,7 +744,9 @@ impl<V: Vector> PairList<V> {
 
     /// Lists the neighbours within `radius` among `points` (indexed by `grid`) of every point
     /// of `queries`, with `factor(|r_ij|)` per pair; in parallel over blocks of queries (the
-    /// content does not depend on the number of threads).
+    /// content does not depend on the number of threads). A query with no point in the cells
+    /// around it gets its empty row without a walk ([`CellGrid::for_each_sparse_neighbour`]):
+    /// the particles away from the walls, the elements out of the water.
     pub fn rebuild(
         &mut self,
         grid: &CellGrid<V>,
@@ -737,8 +756,71 @@ impl<V: Vector> PairList<V> {
         factor: impl Fn(f64) -> f64 + Sync,
     ) {
         self.fill(queries.len(), factor, |i, visit| {
-            grid.for_each_neighbour(queries[i], points, radius, visit)
+            grid.for_each_sparse_neighbour(queries[i], points, radius, visit)
         });
+    }
+
+    /// Lists, for each of the `points` points of `rows`, the queries whose rows in `rows` hold
+    /// it, each with its offset negated and its factor, visiting the queries in `order`: the
+    /// rows that [`PairList::rebuild`] would list from the points among the queries, with the
+    /// same bits, when `order` is the queries' grid's [`CellGrid::points_in_search_order`]
+    /// (the same pairs within the same radius; `q - p = -(p - q)` exactly, so `|r_ij|` and the
+    /// factor keep their bits) — without a search. In parallel over chunks of blocks, each
+    /// task reading every row (the content does not depend on the number of threads).
+    pub fn transpose(&mut self, rows: &PairList<V>, points: usize, order: &[u32]) {
+        let mut counts = vec![0u32; points];
+        for block in &rows.blocks {
+            for &j in &block.index {
+                counts[j as usize] += 1;
+            }
+        }
+        self.queries = points;
+        self.blocks
+            .resize_with(points.div_ceil(Self::BLOCK), Default::default);
+        let chunk = self
+            .blocks
+            .len()
+            .div_ceil(4 * rayon::current_num_threads())
+            .max(1);
+        self.blocks
+            .par_chunks_mut(chunk)
+            .enumerate()
+            .for_each(|(c, blocks)| {
+                let first = c * chunk * Self::BLOCK;
+                let last = (first + blocks.len() * Self::BLOCK).min(points);
+                // Each point's next slot in its block.
+                let mut next = vec![0u32; last - first];
+                for (b, block) in blocks.iter_mut().enumerate() {
+                    let p0 = first + b * Self::BLOCK;
+                    let p1 = (p0 + Self::BLOCK).min(points);
+                    block.start.clear();
+                    block.start.push(0);
+                    for p in p0..p1 {
+                        next[p - first] = *block.start.last().unwrap();
+                        block.start.push(next[p - first] + counts[p]);
+                    }
+                    let pairs = *block.start.last().unwrap() as usize;
+                    block.index.resize(pairs, 0);
+                    block.offset.resize(pairs, V::ZERO);
+                    block.factor.resize(pairs, 0.0);
+                }
+                for &q in order {
+                    let (index, offset, factor) = rows.neighbours(q as usize);
+                    for ((&j, &r_ij), &f) in index.iter().zip(offset).zip(factor) {
+                        let j = j as usize;
+                        if !(first..last).contains(&j) {
+                            continue;
+                        }
+                        let block = &mut blocks[(j - first) / Self::BLOCK];
+                        let slot = &mut next[j - first];
+                        let k = *slot as usize;
+                        block.index[k] = q;
+                        block.offset[k] = -r_ij;
+                        block.factor[k] = f;
+                        *slot += 1;
+                    }
+                }
+            });
     }
 
     /// Fills the rows of `queries` queries, block by block in parallel: `neighbours(i, visit)`
@@ -1135,6 +1217,69 @@ pub(super) mod tests {
         check_pair_list(p2.clone(), 0.07, Periodicity::none());
         check_pair_list(p2, 0.07, period2);
         check_pair_list(p3, 0.15, period3);
+    }
+
+    /// Rows transposed from a search of the queries' grid (in the points' search order)
+    /// against the rows a search of the points' grid lists: the same partners in the same
+    /// order with the same bits.
+    fn check_transpose<V: Vector>(queries: Vec<V>, points: Vec<V>, radius: f64) {
+        let factor = |r: f64| (1.0 - r / radius).powi(3);
+        let mut query_grid = CellGrid::new(radius * 1.3);
+        query_grid.rebuild(&queries);
+        let mut point_grid = CellGrid::new(radius);
+        point_grid.rebuild(&points);
+        let mut searched = PairList::default();
+        searched.rebuild(&point_grid, &queries, &points, radius, factor);
+        // The queries near each point, the points visited as a search of their grid meets them.
+        let mut from_points = PairList::default();
+        from_points.rebuild(&query_grid, &points, &queries, radius, factor);
+        let order = point_grid.points_in_search_order().unwrap();
+        let mut transposed = PairList::default();
+        // Twice: the second time into the kept buffers.
+        for _ in 0..2 {
+            transposed.transpose(&from_points, queries.len(), &order);
+            assert_eq!(transposed.len(), queries.len());
+            assert_eq!(transposed.pairs(), searched.pairs());
+            for i in 0..queries.len() {
+                let bits = |list: &PairList<V>| {
+                    let mut row = Vec::new();
+                    list.for_each(i, |j, r_ij, f| {
+                        let mut b = vec![j as u64, f.to_bits()];
+                        b.extend((0..V::DIM).map(|k| r_ij.get(k).to_bits()));
+                        row.push(b);
+                    });
+                    row
+                };
+                assert_eq!(bits(&transposed), bits(&searched), "query {i}");
+            }
+        }
+        assert!(searched.pairs() > queries.len());
+    }
+
+    #[test]
+    fn transposed_rows_repeat_the_search_in_order_and_bits() {
+        let (p2, _, p3, _) = point_clouds(11);
+        // Sparse points (a tenth, shifted, some outside the queries' box) against all.
+        let sparse2 = p2.iter().step_by(10).map(|&p| p * 1.2 - DVec2::splat(0.05));
+        check_transpose(p2.clone(), sparse2.collect(), 0.07);
+        let sparse3 = p3.iter().step_by(10).map(|&p| p * 1.2 - DVec3::splat(0.05));
+        check_transpose(p3.clone(), sparse3.collect(), 0.15);
+        let (_, _, p3b, _) = point_clouds(12);
+        check_transpose(p3, p3b, 0.15);
+    }
+
+    #[test]
+    fn a_periodic_grid_has_no_single_search_order() {
+        let (p2, period2, _, _) = point_clouds(5);
+        let mut grid = CellGrid::with_period(0.07, period2).unwrap();
+        let points: Vec<DVec2> = p2.into_iter().map(|p| period2.wrap(p)).collect();
+        grid.rebuild(&points);
+        assert!(grid.points_in_search_order().is_none());
+        let mut open = CellGrid::new(0.07);
+        open.rebuild(&points);
+        let mut order = open.points_in_search_order().unwrap();
+        order.sort_unstable();
+        assert_eq!(order, (0..points.len() as u32).collect::<Vec<_>>());
     }
 
     #[test]

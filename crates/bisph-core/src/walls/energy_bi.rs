@@ -112,7 +112,10 @@ pub struct ListedEnergyWalls<'a, V> {
 }
 
 impl<V: Vector> ListedEnergyWalls<'_, V> {
-    /// Lists both pair sets at the current positions (kernel values as the factors).
+    /// Lists both pair sets at the current positions (kernel values as the factors): the
+    /// elements' particles by a search of the fluid grid, the particles' elements by
+    /// transposing them in the wall grid's search order (the rows and bits of a search of
+    /// the wall grid, [`PairList::transpose`]), or by that search on a periodic grid.
     pub fn rebuild(
         kernel: &Wendland,
         particle_elements: &mut PairList<V>,
@@ -123,13 +126,6 @@ impl<V: Vector> ListedEnergyWalls<'_, V> {
         fluid_grid: &CellGrid<V>,
     ) {
         let k = *kernel;
-        particle_elements.rebuild(
-            wall_grid,
-            fluid_position,
-            &elements.centre,
-            kernel.support,
-            |r| k.value(r),
-        );
         element_particles.rebuild(
             fluid_grid,
             &elements.centre,
@@ -137,6 +133,18 @@ impl<V: Vector> ListedEnergyWalls<'_, V> {
             kernel.support,
             |r| k.value(r),
         );
+        match wall_grid.points_in_search_order() {
+            Some(order) => {
+                particle_elements.transpose(element_particles, fluid_position.len(), &order)
+            }
+            None => particle_elements.rebuild(
+                wall_grid,
+                fluid_position,
+                &elements.centre,
+                kernel.support,
+                |r| k.value(r),
+            ),
+        }
     }
 }
 
