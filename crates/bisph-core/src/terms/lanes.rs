@@ -4,7 +4,9 @@
 //! AVX2 (checked at run time). The single-precision kernel gradients of the list are widened
 //! exactly, as the scalar sweep widens them; every lane performs the operations of
 //! [`super::pair_shares`] on its component, in its order (the dot product's terms are added
-//! left to right), and no multiply-add is fused: the sums have the bits of the scalar sweep.
+//! left to right), or ones with the same result in every case (a sign moved from one factor
+//! of a product to the other), and no multiply-add is fused: the sums have the bits of the
+//! scalar sweep.
 
 use super::{GradientSums, Side};
 use crate::dim::Vector;
