@@ -113,10 +113,10 @@ mod x86 {
             // (p_a + p_b, .., -1), times V_a for the partner, negated in x, y, z and times V_b
             // for `i`.
             let sum = _mm256_add_pd(p_a, _mm256_broadcast_sd(&*b.add(4)));
-            let ones = _mm256_blend_pd(sum, minus_one, 0b1000);
-            let to_partner = _mm256_mul_pd(ones, volume_a);
+            let coefficients = _mm256_blend_pd(sum, minus_one, 0b1000);
+            let to_partner = _mm256_mul_pd(coefficients, volume_a);
             let to_own = _mm256_mul_pd(
-                _mm256_xor_pd(ones, negate_xyz),
+                _mm256_xor_pd(coefficients, negate_xyz),
                 _mm256_broadcast_sd(&*b.add(5)),
             );
             sum_own = _mm256_add_pd(sum_own, _mm256_mul_pd(gd, to_own));
