@@ -28,9 +28,10 @@ pub struct WallClearance<V> {
     /// wall-grid cells around it at the measurement, less [`REACH_ALLOWANCE`] times the
     /// element's reach; at most one cell less the largest reach (no farther element can come
     /// closer).
-    lower_bound: Vec<f64>,
+    fixed_bound: Vec<f64>,
     /// `min_j (|x_i - c_j| - reach_j)` over the moving bodies' elements in those cells, each
-    /// reach widened by [`REACH_ALLOWANCE`], with the same ceiling (empty when no body moves).
+    /// reach widened by [`REACH_ALLOWANCE`], with the same ceiling (the ceiling alone where no
+    /// body moves).
     moving_bound: Vec<f64>,
     /// How far a particle may have moved since the measurement.
     slack: f64,
@@ -44,7 +45,7 @@ pub struct WallClearance<V> {
 impl<V> Default for WallClearance<V> {
     fn default() -> Self {
         WallClearance {
-            lower_bound: Vec::new(),
+            fixed_bound: Vec::new(),
             moving_bound: Vec::new(),
             slack: 0.0,
             centres: Vec::new(),
@@ -74,9 +75,9 @@ impl<V: Vector> WallClearance<V> {
             .map(|b| !matches!(b.motion, Motion::Fixed))
             .collect();
         let moves = |j: usize| moving[elements.body[j] as usize];
-        self.lower_bound.resize(points.len(), 0.0);
+        self.fixed_bound.resize(points.len(), 0.0);
         self.moving_bound.resize(points.len(), 0.0);
-        self.lower_bound
+        self.fixed_bound
             .par_iter_mut()
             .zip(self.moving_bound.par_iter_mut())
             .zip(points.par_iter())
@@ -137,7 +138,7 @@ impl<V: Vector> WallClearance<V> {
     /// since the measurement): none of them is clear until the next measurement.
     pub fn forget_points(&mut self, moved: &[u32]) {
         for &i in moved {
-            if let Some(bound) = self.lower_bound.get_mut(i as usize) {
+            if let Some(bound) = self.fixed_bound.get_mut(i as usize) {
                 *bound = f64::NEG_INFINITY;
             }
             if let Some(bound) = self.moving_bound.get_mut(i as usize) {
@@ -150,7 +151,7 @@ impl<V: Vector> WallClearance<V> {
     /// in that order (the others were removed).
     pub fn retain(&mut self, kept: &[u32]) {
         if self.measured {
-            self.lower_bound = kept.iter().map(|&i| self.lower_bound[i as usize]).collect();
+            self.fixed_bound = kept.iter().map(|&i| self.fixed_bound[i as usize]).collect();
             self.moving_bound = kept
                 .iter()
                 .map(|&i| self.moving_bound[i as usize])
@@ -170,7 +171,7 @@ impl<V: Vector> WallClearance<V> {
     pub fn clear(&self, i: usize, distance: f64) -> bool {
         self.measured
             && self
-                .lower_bound
+                .fixed_bound
                 .get(i)
                 .zip(self.moving_bound.get(i))
                 .is_some_and(|(&fixed, &moving)| {
@@ -255,17 +256,17 @@ mod tests {
         for (i, &x) in points.iter().enumerate() {
             let distance = distance_to_elements(&walls, x);
             assert!(
-                clearance.lower_bound[i] <= distance,
+                clearance.fixed_bound[i] <= distance,
                 "{x}: bound {} above the distance {distance}",
-                clearance.lower_bound[i]
+                clearance.fixed_bound[i]
             );
             let inside = x.cmpgt(DVec3::ZERO).all() && x.cmplt(DVec3::ONE).all();
             let ceiling = walls.grid.cell_size() - walls.elements.max_reach * (1.0 + 1e-5);
             if inside {
                 assert!(
-                    clearance.lower_bound[i] >= distance.min(ceiling) - 1e-5,
+                    clearance.fixed_bound[i] >= distance.min(ceiling) - 1e-5,
                     "{x}: bound {} below the distance {distance}",
-                    clearance.lower_bound[i]
+                    clearance.fixed_bound[i]
                 );
             }
             clear += usize::from(clearance.clear(i, 0.05));
@@ -289,12 +290,12 @@ mod tests {
         assert!(
             !clearance.clear(0, 0.0),
             "behind: {}",
-            clearance.lower_bound[0]
+            clearance.fixed_bound[0]
         );
         assert!(
             clearance.clear(1, 0.01),
             "inside: {}",
-            clearance.lower_bound[1]
+            clearance.fixed_bound[1]
         );
     }
 
