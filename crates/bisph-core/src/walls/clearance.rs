@@ -5,15 +5,16 @@
 //! concern within a step. A particle that lies behind a wall at the measurement (water that
 //! went over the rim of an open wall) gets no bound, so the watch looks at it at every step.
 //!
-//! Each particle holds two bounds. The fixed walls' bound is the distance to the nearest point
-//! of their elements. Walls of moving bodies keep their bound as they move: an element's
+//! Each particle holds two bounds. The fixed walls' bound is the distance to the nearest disc
+//! of an element's reach about its centre in its plane: the element lies within it, and the
+//! bounce reflects a particle that crosses the plane within it. Walls of moving bodies keep their bound as they move: an element's
 //! surface lies within its reach of its centre whatever the body's pose, so the distance to its
 //! centre less its reach falls by at most the distance the centre has moved since the
 //! measurement, and [`WallClearance::follow`] takes the largest such distance off the moving
 //! walls' bounds only. Elements that stretch with a piston change their reach, so walls with
 //! such elements get no bounds.
 
-use super::{nearest_on_element, Walls};
+use super::Walls;
 use crate::bodies::Motion;
 use crate::dim::Vector;
 use rayon::prelude::*;
@@ -24,10 +25,11 @@ const REACH_ALLOWANCE: f64 = 1e-5;
 /// Per particle, a distance below which no wall surface comes (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct WallClearance<V> {
-    /// The distance from `x_i` to the nearest point of the fixed walls' elements in the
-    /// wall-grid cells around it at the measurement, less [`REACH_ALLOWANCE`] times the
-    /// element's reach; at most one cell less the largest reach (no farther element can come
-    /// closer).
+    /// The distance from `x_i` to the nearest of the fixed walls' element discs (the disc of
+    /// an element's reach about its centre in its plane, which holds the element) in the
+    /// wall-grid cells around it at the measurement, each reach widened by
+    /// [`REACH_ALLOWANCE`] and the distance lowered by as much; at most one cell less the
+    /// largest reach (no farther element can come closer).
     fixed_bound: Vec<f64>,
     /// `min_j (|x_i - c_j| - reach_j)` over the moving bodies' elements in those cells, each
     /// reach widened by [`REACH_ALLOWANCE`], with the same ceiling (the ceiling alone where no
@@ -92,11 +94,9 @@ impl<V: Vector> WallClearance<V> {
                     if moves(j) {
                         *moving = moving.min(d);
                     } else if d < *fixed {
-                        let exact = nearest_on_element(elements.current_corners(j), shift, x)
-                            .map_or(d, |(d2, _, _)| {
-                                d2.sqrt() - REACH_ALLOWANCE * elements.reach[j]
-                            });
-                        *fixed = fixed.min(exact.max(d));
+                        let r = x - elements.centre[j] - shift;
+                        let disc = distance_to_disc(r, elements.normal[j], reach(j));
+                        *fixed = fixed.min((disc - REACH_ALLOWANCE * elements.reach[j]).max(d));
                     }
                 });
                 if fixed.min(*moving) < far
@@ -180,6 +180,16 @@ impl<V: Vector> WallClearance<V> {
     }
 }
 
+/// Distance from the point `r` (from an element's centre) to the disc of radius `reach`
+/// about the centre in the element's plane (normal `n`; in 2-D, the segment of half-length
+/// `reach`): the element lies within it, and the bounce reflects a particle crossing the
+/// plane within it.
+fn distance_to_disc<V: Vector>(r: V, n: V, reach: f64) -> f64 {
+    let normal = r.dot(n);
+    let beyond = ((r - n * normal).length() - reach).max(0.0);
+    (normal * normal + beyond * beyond).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,8 +253,8 @@ mod tests {
     }
 
     /// The bounds never exceed the distance to the walls, at points inside, outside and on
-    /// them; inside, the fixed walls' bounds are that distance (up to the allowance) where it
-    /// is below the ceiling; without a measurement nothing is clear.
+    /// them; inside (below the rim), the fixed walls' bounds are that distance (up to the
+    /// allowance) where it is below the ceiling; without a measurement nothing is clear.
     #[test]
     fn bounds_stay_below_the_distance_to_the_walls() {
         let walls = open_box();
@@ -260,7 +270,9 @@ mod tests {
                 "{x}: bound {} above the distance {distance}",
                 clearance.fixed_bound[i]
             );
-            let inside = x.cmpgt(DVec3::ZERO).all() && x.cmplt(DVec3::ONE).all();
+            // Below the open top, where the discs of the side walls' elements reach past
+            // the rim.
+            let inside = x.cmpgt(DVec3::ZERO).all() && x.cmplt(DVec3::new(1.0, 1.0, 0.8)).all();
             let ceiling = walls.grid.cell_size() - walls.elements.max_reach * (1.0 + 1e-5);
             if inside {
                 assert!(
