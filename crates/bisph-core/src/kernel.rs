@@ -38,6 +38,12 @@ impl Wendland {
         }
     }
 
+    /// The constants of [`Wendland::gradient_factor`], `(1 / h, c)`: the factor is
+    /// `c a a a` with `a = 1 - q / 2`, `q = r (1 / h)`, and 0 from `q = 2` on.
+    pub(crate) fn gradient_constants(&self) -> (f64, f64) {
+        (self.inv_h, self.grad_alpha)
+    }
+
     /// Kernel of smoothing length `h` for vectors of type `V`.
     pub fn for_dim<V: Vector>(h: f64) -> Self {
         Self::new(h, V::DIM)

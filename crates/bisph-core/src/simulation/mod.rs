@@ -957,8 +957,15 @@ impl<V: Vector> Simulation<V> {
         }
         let factor = |r| kernel.gradient_factor(r);
         let s = &mut self.scratch;
-        s.candidates
-            .list(position, kernel.support, factor, listing, &mut s.pairs);
+        match listing {
+            Listing::Product => s
+                .candidates
+                .list_kernel_gradients(position, &kernel, &mut s.pairs),
+            Listing::OffsetAndFactor => {
+                s.candidates
+                    .list(position, kernel.support, factor, listing, &mut s.pairs)
+            }
+        }
         s.pairs_listed = true;
         // The energy-conserving walls' pairs (eqs 51-52 and 71): each pair is stored twice
         // (once per side); a wetted element sees at most half a kernel sphere of particles.
