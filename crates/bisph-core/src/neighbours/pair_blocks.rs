@@ -506,6 +506,17 @@ impl<V: Vector> ListedPairs<V> {
 }
 
 impl<V: Vector> ListedChunk<V> {
+    /// No rows, the buffers kept.
+    fn empty(&mut self) {
+        self.first.clear();
+        self.start.clear();
+        self.second.clear();
+        self.offset.clear();
+        self.factor.clear();
+        self.gradient.clear();
+        self.start.push(0);
+    }
+
     /// Lists the pairs of `from` within `sqrt(r2max)` at `points`, each with what `listing`
     /// asks for (`factor` gives the per-pair factor from `|r_ij|`).
     fn fill(
@@ -517,13 +528,7 @@ impl<V: Vector> ListedChunk<V> {
         kept: &mut KeptBlock<V>,
         (factor, listing): (&(impl Fn(f64) -> f64 + Sync), Listing),
     ) {
-        self.first.clear();
-        self.start.clear();
-        self.second.clear();
-        self.offset.clear();
-        self.factor.clear();
-        self.gradient.clear();
-        self.start.push(0);
+        self.empty();
         from.sweep(points, r2max, period, kept, |i, index, r_ij, r2| {
             // A row's runs come one after the other; rows have distinct first particles.
             if self.first.last() != Some(&(i as u32)) {

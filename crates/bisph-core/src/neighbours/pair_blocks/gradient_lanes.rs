@@ -27,13 +27,7 @@ impl ListedChunk<DVec3> {
         points: &[DVec3],
         kernel: &Wendland,
     ) {
-        self.first.clear();
-        self.start.clear();
-        self.second.clear();
-        self.offset.clear();
-        self.factor.clear();
-        self.gradient.clear();
-        self.start.push(0);
+        self.empty();
         let (inv_h, grad_alpha) = kernel.gradient_constants();
         let constants = Constants {
             r2max: _mm256_set1_pd(kernel.support * kernel.support),
