@@ -10,6 +10,7 @@
 //! 4. Boregowda & Liu, BIPI particle initialisation.
 #![deny(missing_docs)]
 
+mod avx2;
 pub mod bi;
 pub mod bodies;
 pub mod decomposition;

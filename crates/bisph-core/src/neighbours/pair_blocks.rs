@@ -27,6 +27,8 @@ use crate::kernel::Wendland;
 use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
+mod filter_lanes;
+#[cfg(target_arch = "x86_64")]
 mod gradient_lanes;
 
 /// A pair list over the blocks of a [`CellGrid`] (see the module documentation): the pairs
@@ -329,7 +331,7 @@ impl<V: Vector> PairBlocks<V> {
         #[cfg(target_arch = "x86_64")]
         if std::any::TypeId::of::<V>() == std::any::TypeId::of::<glam::DVec3>()
             && !self.period.any()
-            && std::arch::is_x86_feature_detected!("avx2")
+            && crate::avx2::available()
         {
             // SAFETY: `V` is `DVec3` (checked above), so each cast names the type it has.
             let (blocks, points, listed) = unsafe {

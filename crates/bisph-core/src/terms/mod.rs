@@ -245,8 +245,10 @@ fn operators_with<V: Vector, W: WallModel<V>>(
     }
 }
 
-/// The fluid sums of one particle (before the wall model completes them).
+/// The fluid sums of one particle (before the wall model completes them), laid out as its
+/// fields for [`lanes`].
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct FluidSums<V> {
     grad_p: V,
     div_u: f64,
@@ -605,7 +607,20 @@ fn scattered_sums<
         }
     } else {
         let sums = zeroed(&mut buffers.sums, n, FluidSums::ZERO);
-        sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(model, fluid, sides, neighbours, sums);
+        let in_lanes = match neighbours {
+            Scattered::Filtered {
+                pairs,
+                round: false,
+            } if !WEIGHTED && DIFFUSE && !VISCID && !SHEPARD => {
+                lanes::sweep_filtered_diffused(model, fluid.position, sides, pairs, sums)
+            }
+            _ => false,
+        };
+        if !in_lanes {
+            sweep_into::<V, WEIGHTED, DIFFUSE, VISCID, SHEPARD>(
+                model, fluid, sides, neighbours, sums,
+            );
+        }
     }
 }
 

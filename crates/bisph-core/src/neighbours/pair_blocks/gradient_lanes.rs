@@ -98,22 +98,21 @@ struct Constants {
     xyz: __m256i,
 }
 
+/// The squared lengths `(x x + y y) + z z` of four offsets `(x, y, z, _)`, one per lane.
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn squared_lengths(offset: &[__m256d; 4]) -> __m256d {
+    let [x, y, z, _] = crate::avx2::transpose(*offset);
+    _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
+        _mm256_mul_pd(z, z),
+    )
+}
+
 /// For four offsets `(x, y, z, 0)`: the bits of those within the support (`r^2 < r2max`) and
 /// their kernel gradient factors, one per lane.
 #[target_feature(enable = "avx2")]
 unsafe fn factors(offset: &[__m256d; 4], c: &Constants) -> (u32, __m256d) {
-    // Transposed: the x, y and z of the four offsets.
-    let xy01 = _mm256_unpacklo_pd(offset[0], offset[1]);
-    let yw01 = _mm256_unpackhi_pd(offset[0], offset[1]);
-    let xy23 = _mm256_unpacklo_pd(offset[2], offset[3]);
-    let yw23 = _mm256_unpackhi_pd(offset[2], offset[3]);
-    let x = _mm256_permute2f128_pd(xy01, xy23, 0x20);
-    let y = _mm256_permute2f128_pd(yw01, yw23, 0x20);
-    let z = _mm256_permute2f128_pd(xy01, xy23, 0x31);
-    let r2 = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
-        _mm256_mul_pd(z, z),
-    );
+    let r2 = squared_lengths(offset);
     let inside = _mm256_movemask_pd(_mm256_cmp_pd(r2, c.r2max, _CMP_LT_OQ)) as u32;
     let q = _mm256_mul_pd(_mm256_sqrt_pd(r2), c.inv_h);
     let a = _mm256_sub_pd(c.one, _mm256_mul_pd(c.half, q));

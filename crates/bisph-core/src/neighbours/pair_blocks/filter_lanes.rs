@@ -1,0 +1,124 @@
+//! The filter of an explicit step's Verlet list in 3-D with four candidates in the lanes of
+//! AVX2 registers, on processors that have AVX2 (checked at run time) and without periodic
+//! axes: each row's partners within the radius, kept without a branch per candidate, with
+//! their offsets `x_j - x_i` and squared lengths `(x x + y y) + z z`, the bits of the scalar
+//! filter ([`super::PairBlocks::sweep`]), handed over as one row for a sweep in lanes.
+
+use super::gradient_lanes::squared_lengths;
+use super::{sweep_classes, BlockChunk, PairBlocks, RunValues};
+use glam::DVec3;
+use std::arch::x86_64::*;
+
+/// One task's filtered row: the kept partners' indices and their slots `(r_ij, |r_ij|^2)`,
+/// the last repeated up to a multiple of four.
+#[derive(Default)]
+struct KeptRow {
+    index: Vec<u32>,
+    slot: Vec<[f64; 4]>,
+}
+
+impl PairBlocks<DVec3> {
+    /// [`PairBlocks::sweep`] with the filter in lanes and whole rows: for each first particle
+    /// `i` with partners within `radius` at `points`, `visit(i, values, n, index, slot)` with
+    /// `index[k]` the `n` kept partners in the list's order, `slot[k] = (r_ij, |r_ij|^2)`
+    /// theirs (the scalar filter's bits), both repeating the last up to a multiple of four.
+    /// Returns `false`, having done nothing, where the lanes do not apply (a periodic axis,
+    /// or a processor without AVX2).
+    ///
+    /// # Panics
+    /// When `points` or `values` hold fewer entries than the list.
+    pub(crate) fn sweep_rows_in_lanes<T: Send>(
+        &self,
+        points: &[DVec3],
+        radius: f64,
+        values: &mut [T],
+        visit: impl Fn(usize, &mut RunValues<'_, T>, usize, &[u32], &[[f64; 4]]) + Sync,
+    ) -> bool {
+        if self.period.any() || !crate::avx2::available() {
+            return false;
+        }
+        assert!(points.len() >= self.len(), "fewer points than listed");
+        let r2max = radius * radius;
+        sweep_classes(
+            &self.classes,
+            self.len(),
+            values,
+            KeptRow::default,
+            |chunk: &BlockChunk, shared, row| {
+                for (r, &i) in chunk.first.iter().enumerate() {
+                    let partners =
+                        &chunk.second[chunk.start[r] as usize..chunk.start[r + 1] as usize];
+                    // SAFETY: AVX2 is present (checked above); the list's points index
+                    // `points` (checked above).
+                    let n = unsafe { row.filter(points, i, partners, r2max) };
+                    if n > 0 {
+                        let i = i as usize;
+                        let index = &row.index[..];
+                        let mut run = RunValues { shared, i, index };
+                        visit(i, &mut run, n, index, &row.slot);
+                    }
+                }
+            },
+        );
+        true
+    }
+}
+
+impl KeptRow {
+    /// Keeps the `partners` of `i` within `sqrt(r2max)` at `points`; returns how many.
+    ///
+    /// # Safety
+    /// The processor has AVX2; `i` and every partner index `points`.
+    #[target_feature(enable = "avx2")]
+    unsafe fn filter(&mut self, points: &[DVec3], i: u32, partners: &[u32], r2max: f64) -> usize {
+        self.index.clear();
+        self.slot.clear();
+        // Every candidate is stored at the next free slot, at most one past the kept ones
+        // for each; the repeats of the last take at most three more.
+        self.index.reserve(partners.len() + 4);
+        self.slot.reserve(partners.len() + 4);
+        let index = self.index.as_mut_ptr();
+        let slot = self.slot.as_mut_ptr() as *mut f64;
+        let points = points.as_ptr() as *const f64;
+        let xyz = _mm256_set_epi64x(0, -1, -1, -1);
+        let x = _mm256_maskload_pd(points.add(3 * i as usize), xyz);
+        let r2max = _mm256_set1_pd(r2max);
+        let mut kept = 0usize;
+        for group in partners.chunks(4) {
+            // A short last group repeats its last candidate, which is never kept.
+            let last = group[group.len() - 1];
+            let j = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(last));
+            let valid = (1u32 << group.len()) - 1;
+            let offset = j.map(|j| {
+                let p = _mm256_maskload_pd(points.add(3 * j as usize), xyz);
+                _mm256_sub_pd(p, x)
+            });
+            let r2 = squared_lengths(&offset);
+            let inside = _mm256_movemask_pd(_mm256_cmp_pd(r2, r2max, _CMP_LT_OQ)) as u32 & valid;
+            let r2 = [
+                _mm256_permute4x64_pd(r2, 0x00),
+                _mm256_permute4x64_pd(r2, 0x55),
+                _mm256_permute4x64_pd(r2, 0xaa),
+                _mm256_permute4x64_pd(r2, 0xff),
+            ];
+            for k in 0..4 {
+                _mm256_storeu_pd(
+                    slot.add(4 * kept),
+                    _mm256_blend_pd(offset[k], r2[k], 0b1000),
+                );
+                *index.add(kept) = j[k];
+                kept += ((inside >> k) & 1) as usize;
+            }
+        }
+        let padded = kept.next_multiple_of(4);
+        if kept > 0 {
+            for k in kept..padded {
+                *index.add(k) = *index.add(kept - 1);
+                _mm256_storeu_pd(slot.add(4 * k), _mm256_loadu_pd(slot.add(4 * (kept - 1))));
+            }
+        }
+        self.index.set_len(padded);
+        self.slot.set_len(padded);
+        kept
+    }
+}
