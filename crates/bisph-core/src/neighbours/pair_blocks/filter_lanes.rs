@@ -1,13 +1,90 @@
-//! The filter of an explicit step's Verlet list in 3-D with four candidates in the lanes of
-//! AVX2 registers, on processors that have AVX2 (checked at run time) and without periodic
-//! axes: each row's partners within the radius, kept without a branch per candidate, with
-//! their offsets `x_j - x_i` and squared lengths `(x x + y y) + z z`, the bits of the scalar
-//! filter ([`super::PairBlocks::sweep`]), handed over as one row for a sweep in lanes.
+//! The filters of the pair blocks in 3-D with four candidates in the lanes of AVX2
+//! registers, on processors that have AVX2 (checked at run time) and without periodic axes,
+//! candidates kept without a branch per candidate, their offsets `x_j - x_i` and squared
+//! lengths `(x x + y y) + z z` those of the scalar filters, so the same candidates are kept:
+//! - the build of the list: the candidates of a block's cells within the listing radius
+//!   ([`BlockChunk::fill`]);
+//! - the explicit step's filter of the list at the positions: each row's partners within the
+//!   radius with their offsets and squared lengths ([`super::PairBlocks::sweep`]), handed
+//!   over as one row for a sweep in lanes.
 
 use super::gradient_lanes::squared_lengths;
 use super::{sweep_classes, BlockChunk, PairBlocks, RunValues};
+use crate::neighbours::CellGrid;
 use glam::DVec3;
 use std::arch::x86_64::*;
+
+impl BlockChunk {
+    /// [`BlockChunk::fill`] with the candidates in lanes: the same rows, partner for partner.
+    ///
+    /// # Safety
+    /// The processor has AVX2; `grid` indexes `points`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn fill_in_lanes(
+        &mut self,
+        grid: &CellGrid<DVec3>,
+        points: &[DVec3],
+        owned: usize,
+        r2max: f64,
+    ) {
+        self.first.clear();
+        self.start.clear();
+        self.second.clear();
+        self.start.push(0);
+        let points = points.as_ptr() as *const f64;
+        let xyz = _mm256_set_epi64x(0, -1, -1, -1);
+        let r2max = _mm256_set1_pd(r2max);
+        for a in &self.anchors {
+            let cells = grid.block_cells(*a);
+            for d in 0..8 {
+                let (s0, s1) = cells[d];
+                for s in s0..s1 {
+                    let p = grid.items[s] as usize;
+                    let x = _mm256_maskload_pd(points.add(3 * p), xyz);
+                    // A halo particle keeps only partners below `owned`.
+                    let last = if p >= owned { owned as u32 } else { u32::MAX };
+                    for (d2, &(t0, t1)) in cells.iter().enumerate().skip(d) {
+                        if d2 & d != 0 {
+                            continue;
+                        }
+                        let from = if d2 == d { s + 1 } else { t0 };
+                        let candidates = &grid.items[from..t1];
+                        let listed = self.second.len();
+                        // Every candidate is stored at the next free slot, at most one past
+                        // the kept ones.
+                        self.second.reserve(candidates.len() + 1);
+                        let out = self.second.as_mut_ptr().add(listed);
+                        let mut kept = 0usize;
+                        for group in candidates.chunks(4) {
+                            // A short last group repeats its last candidate, never kept.
+                            let repeat = group[group.len() - 1];
+                            let q = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(repeat));
+                            let mut keep = (1u32 << group.len()) - 1;
+                            for (k, &q) in q.iter().enumerate() {
+                                keep &= !(u32::from(q >= last) << k);
+                            }
+                            let offset = q.map(|q| {
+                                let y = _mm256_maskload_pd(points.add(3 * q as usize), xyz);
+                                _mm256_sub_pd(y, x)
+                            });
+                            let r2 = squared_lengths(&offset);
+                            keep &= _mm256_movemask_pd(_mm256_cmp_pd(r2, r2max, _CMP_LT_OQ)) as u32;
+                            for (k, &q) in q.iter().enumerate() {
+                                *out.add(kept) = q;
+                                kept += ((keep >> k) & 1) as usize;
+                            }
+                        }
+                        self.second.set_len(listed + kept);
+                    }
+                    if self.second.len() > *self.start.last().unwrap() as usize {
+                        self.first.push(p as u32);
+                        self.start.push(self.second.len() as u32);
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// One task's filtered row: the kept partners' indices and their slots `(r_ij, |r_ij|^2)`,
 /// the last repeated up to a multiple of four.
