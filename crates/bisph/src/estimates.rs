@@ -88,12 +88,13 @@ pub const ESTIMATES: &[Estimate] = &[
     e("floating-box-2d", Measured(16.2), Scaled(16.2 * 12.0)),
     e("floating-box-held-2d", Measured(3.6), Measured(13.9)),
     // dx 0.55/45 (364,500 particles, 80,200 elements) to 6 s: about 49,100 steps on 2
-    // threads at 0.45-0.48 s per step early in the flow and 0.59 at t = 1.39-1.44 s
-    // (windows of the run, docs/performance.md), taken for the rest: 0.6 s per step.
-    e("spheric-test2", Measured(17.6), Scaled(0.6 * 49_100.0)),
-    // The paper's setting, one run (500,000 particles) to 0.22 s: 2,750 steps, 6,784 s on 2
-    // threads, its first 40 minutes beside compilations (docs/performance.md).
-    e("apollo", Measured(75.7), Measured(6_784.0)),
+    // threads at 0.59 s per step at t = 1.39-1.44 s (a window of the run), a step 1.18
+    // times faster late in the flow since the explicit sweep in vector lanes (measured at
+    // dx = 0.55/20; docs/performance.md), taken for the rest: 0.5 s per step.
+    e("spheric-test2", Measured(17.6), Scaled(0.5 * 49_100.0)),
+    // The paper's setting, one run (500,000 particles) to 0.22 s: 2,750 steps, 3,538 s on 2
+    // threads for the whole validation (docs/validation-report/full/report.md).
+    e("apollo", Measured(75.7), Measured(3_538.0)),
     // Four tanks: 2-D dx 0.025 -> 0.0125, end 5 s -> 20 s (2^3 * 4); 3-D box dx 0.05 ->
     // 0.025, end 5 s -> 10 s (2^4 * 2); SPHERIC tank dx 0.11 -> 0.055, end 2 s -> 10 s with
     // settling uncapped (more): about 32x the quick time. Settling (up to 200 / beta) takes
