@@ -87,7 +87,7 @@ pub(super) fn sweep_filtered_diffused<V: Vector>(
         return false;
     }
     let (inv_h, grad_alpha) = model.kernel.gradient_constants();
-    let constants = x86_diffused::Diffused {
+    let constants = Diffused {
         inv_h,
         grad_alpha,
         minus_two_scale: -2.0 * diffusion.scale,
@@ -176,23 +176,23 @@ mod x86 {
     }
 }
 
+/// The constants of [`sweep_filtered_diffused`]: the kernel's `1/h` and gradient constant,
+/// `-2 delta h c0` of the diffusion, its hydrostatic gradient `rho0 g / c0^2` and the linear
+/// equation of state's `rho0`.
+struct Diffused {
+    inv_h: f64,
+    grad_alpha: f64,
+    minus_two_scale: f64,
+    hydrostatic: [f64; 3],
+    rho0: f64,
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86_diffused {
-    use super::{FluidSums, PairBlocks, Side};
+    use super::{Diffused, FluidSums, PairBlocks, Side};
     use crate::avx2::transpose;
     use glam::DVec3;
     use std::arch::x86_64::*;
-
-    /// The sweep's constants: the kernel's `1/h` and gradient constant, `-2 delta h c0` of
-    /// the diffusion, its hydrostatic gradient `rho0 g / c0^2` and the linear equation of
-    /// state's `rho0`.
-    pub(in super::super) struct Diffused {
-        pub inv_h: f64,
-        pub grad_alpha: f64,
-        pub minus_two_scale: f64,
-        pub hydrostatic: [f64; 3],
-        pub rho0: f64,
-    }
 
     /// The sweep of [`super::sweep_filtered_diffused`] with `constants`, the pairs filtered
     /// within `support`; `false` where the list declines the lanes.
@@ -341,17 +341,8 @@ mod x86_diffused {
 
 #[cfg(not(target_arch = "x86_64"))]
 mod x86_diffused {
-    use super::{FluidSums, PairBlocks, Side};
+    use super::{Diffused, FluidSums, PairBlocks, Side};
     use glam::DVec3;
-
-    /// The sweep's constants (see the x86-64 module).
-    pub(in super::super) struct Diffused {
-        pub inv_h: f64,
-        pub grad_alpha: f64,
-        pub minus_two_scale: f64,
-        pub hydrostatic: [f64; 3],
-        pub rho0: f64,
-    }
 
     /// No processor but x86-64 is taken for AVX2.
     pub(in super::super) fn sweep(

@@ -8,7 +8,7 @@
 //!   radius with their offsets and squared lengths ([`super::PairBlocks::sweep`]), handed
 //!   over as one row for a sweep in lanes.
 
-use super::gradient_lanes::squared_lengths;
+use super::gradient_lanes::{candidate_group, load_point, squared_lengths};
 use super::{sweep_classes, BlockChunk, PairBlocks, RunValues};
 use crate::neighbours::CellGrid;
 use glam::DVec3;
@@ -32,7 +32,6 @@ impl BlockChunk {
         self.second.clear();
         self.start.push(0);
         let points = points.as_ptr() as *const f64;
-        let xyz = _mm256_set_epi64x(0, -1, -1, -1);
         let r2max = _mm256_set1_pd(r2max);
         for a in &self.anchors {
             let cells = grid.block_cells(*a);
@@ -40,7 +39,7 @@ impl BlockChunk {
                 let (s0, s1) = cells[d];
                 for s in s0..s1 {
                     let p = grid.items[s] as usize;
-                    let x = _mm256_maskload_pd(points.add(3 * p), xyz);
+                    let x = load_point(points, p);
                     // A halo particle keeps only partners below `owned`.
                     let last = if p >= owned { owned as u32 } else { u32::MAX };
                     for (d2, &(t0, t1)) in cells.iter().enumerate().skip(d) {
@@ -56,17 +55,10 @@ impl BlockChunk {
                         let out = self.second.as_mut_ptr().add(listed);
                         let mut kept = 0usize;
                         for group in candidates.chunks(4) {
-                            // A short last group repeats its last candidate, never kept.
-                            let repeat = group[group.len() - 1];
-                            let q = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(repeat));
-                            let mut keep = (1u32 << group.len()) - 1;
+                            let (q, mut keep, offset) = candidate_group(points, x, group);
                             for (k, &q) in q.iter().enumerate() {
                                 keep &= !(u32::from(q >= last) << k);
                             }
-                            let offset = q.map(|q| {
-                                let y = _mm256_maskload_pd(points.add(3 * q as usize), xyz);
-                                _mm256_sub_pd(y, x)
-                            });
                             let r2 = squared_lengths(&offset);
                             keep &= _mm256_movemask_pd(_mm256_cmp_pd(r2, r2max, _CMP_LT_OQ)) as u32;
                             for (k, &q) in q.iter().enumerate() {
@@ -157,19 +149,11 @@ impl KeptRow {
         let index = self.index.as_mut_ptr();
         let slot = self.slot.as_mut_ptr() as *mut f64;
         let points = points.as_ptr() as *const f64;
-        let xyz = _mm256_set_epi64x(0, -1, -1, -1);
-        let x = _mm256_maskload_pd(points.add(3 * i as usize), xyz);
+        let x = load_point(points, i as usize);
         let r2max = _mm256_set1_pd(r2max);
         let mut kept = 0usize;
         for group in partners.chunks(4) {
-            // A short last group repeats its last candidate, which is never kept.
-            let last = group[group.len() - 1];
-            let j = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(last));
-            let valid = (1u32 << group.len()) - 1;
-            let offset = j.map(|j| {
-                let p = _mm256_maskload_pd(points.add(3 * j as usize), xyz);
-                _mm256_sub_pd(p, x)
-            });
+            let (j, valid, offset) = candidate_group(points, x, group);
             let r2 = squared_lengths(&offset);
             let inside = _mm256_movemask_pd(_mm256_cmp_pd(r2, r2max, _CMP_LT_OQ)) as u32 & valid;
             let r2 = [

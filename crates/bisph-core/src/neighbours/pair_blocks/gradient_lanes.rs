@@ -36,7 +36,6 @@ impl ListedChunk<DVec3> {
             half: _mm256_set1_pd(0.5),
             one: _mm256_set1_pd(1.0),
             two: _mm256_set1_pd(2.0),
-            xyz: _mm256_set_epi64x(0, -1, -1, -1),
         };
         let points = points.as_ptr() as *const f64;
         for (r, &i) in from.first.iter().enumerate() {
@@ -49,17 +48,10 @@ impl ListedChunk<DVec3> {
             self.gradient.reserve(3 * (partners.len() + 1) + 1);
             let index = self.second.as_mut_ptr().add(listed);
             let gradient = self.gradient.as_mut_ptr().add(3 * listed);
-            let x = _mm256_maskload_pd(points.add(3 * i as usize), constants.xyz);
+            let x = load_point(points, i as usize);
             let mut kept = 0usize;
             for group in partners.chunks(4) {
-                // A short last group repeats its last candidate, which is never kept.
-                let last = group[group.len() - 1];
-                let j = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(last));
-                let valid = (1u32 << group.len()) - 1;
-                let offset = j.map(|j| {
-                    let p = _mm256_maskload_pd(points.add(3 * j as usize), constants.xyz);
-                    _mm256_sub_pd(p, x)
-                });
+                let (j, valid, offset) = candidate_group(points, x, group);
                 let (inside, factor) = factors(&offset, &constants);
                 let inside = inside & valid;
                 for k in 0..4 {
@@ -94,8 +86,29 @@ struct Constants {
     half: __m256d,
     one: __m256d,
     two: __m256d,
-    /// The mask of a point's three coordinates.
-    xyz: __m256i,
+}
+
+/// The point `i` of `points` (three values per point) as `(x, y, z, 0)`.
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn load_point(points: *const f64, i: usize) -> __m256d {
+    _mm256_maskload_pd(points.add(3 * i), _mm256_set_epi64x(0, -1, -1, -1))
+}
+
+/// A group of one to four candidates: the candidates, a short group's last repeated to
+/// four (a repeat is never kept); the bits of the group's own; and their offsets from `x`
+/// at `points`, `(x_j - x, 0)`.
+#[inline]
+#[target_feature(enable = "avx2")]
+pub(super) unsafe fn candidate_group(
+    points: *const f64,
+    x: __m256d,
+    group: &[u32],
+) -> ([u32; 4], u32, [__m256d; 4]) {
+    let last = group[group.len() - 1];
+    let j = [0, 1, 2, 3].map(|k| group.get(k).copied().unwrap_or(last));
+    let offset = j.map(|j| _mm256_sub_pd(load_point(points, j as usize), x));
+    (j, (1u32 << group.len()) - 1, offset)
 }
 
 /// The squared lengths `(x x + y y) + z z` of four offsets `(x, y, z, _)`, one per lane.
