@@ -170,6 +170,35 @@ impl<V: Vector> CandidateRows<V> {
             .sum()
     }
 
+    /// Calls `visit(j, r_ij)` for every candidate `j` of query `i` (each point within the
+    /// listing radius of the query at the build), with `r_ij = points[j] - x` (the minimum
+    /// image across periodic axes), in the order of the grid search at the build.
+    ///
+    /// # Panics
+    /// When `i` is not a listed query.
+    pub fn for_each_listed(&self, i: usize, x: V, points: &[V], mut visit: impl FnMut(usize, V)) {
+        let block = &self.blocks[i / Self::BLOCK];
+        let k = i % Self::BLOCK;
+        let periodic = self.period.any();
+        for &j in &block.index[block.start[k] as usize..block.start[k + 1] as usize] {
+            let d = points[j as usize] - x;
+            visit(
+                j as usize,
+                if periodic {
+                    self.period.minimum_image(d)
+                } else {
+                    d
+                },
+            );
+        }
+    }
+
+    /// The listing radius: every point within it of a query at the build is among the
+    /// query's candidates.
+    pub fn listing_radius(&self) -> f64 {
+        self.listing
+    }
+
     /// Calls `visit(j, r_ij, |r_ij|)` for the candidates `j` of query `i` within `radius` of
     /// `x` (the query's current position), with `r_ij = points[j] - x` (the minimum image
     /// across periodic axes), in the order of the grid search at the build.

@@ -783,8 +783,7 @@ impl<V: Vector> Simulation<V> {
         self.scratch.use_candidates = true;
         self.timings.list_builds += 1;
         self.list_wall_candidates(None);
-        self.wall_clearance
-            .measure(&self.walls, &self.fluid.position, 0.5 * skin);
+        self.measure_wall_clearance(None);
         self.timings.neighbours += start.elapsed().as_secs_f64();
     }
 
@@ -832,6 +831,17 @@ impl<V: Vector> Simulation<V> {
         s.element_particle_rows
             .rebuild(&self.fluid_grid, centres, position, support, s.skin);
         s.wall_rows_valid = true;
+    }
+
+    /// Measures the particles' wall-distance bounds ([`WallClearance::measure`]) at the
+    /// positions `origin` of the list's build (the current positions when `None`), from the
+    /// wall candidate rows where they were listed there.
+    fn measure_wall_clearance(&mut self, origin: Option<&[V]>) {
+        let s = &self.scratch;
+        let rows = s.wall_rows_valid.then_some(&s.particle_element_rows);
+        let points = origin.unwrap_or(&self.fluid.position);
+        self.wall_clearance
+            .measure(&self.walls, points, 0.5 * s.skin, rows);
     }
 
     /// The farthest an element's centre can lie from a particle and count in its wall terms:
@@ -899,7 +909,7 @@ impl<V: Vector> Simulation<V> {
         self.scratch.candidates_valid = true;
         self.scratch.grid_at_build = true;
         self.list_wall_candidates(Some(origin));
-        self.wall_clearance.measure(&self.walls, origin, 0.5 * skin);
+        self.measure_wall_clearance(Some(origin));
         // The run had checked the list at these positions; the particles that have moved past
         // half the skin since the build have no wall-distance bounds, and the grid is over
         // the current positions where they are (the next step places it as the run did).

@@ -144,7 +144,7 @@ mod tests {
         // step of 0.03 s at 2 m/s twice over.
         let position = [DVec3::new(0.0, 0.0, -0.05)];
         let mut clearance = WallClearance::default();
-        clearance.measure(&walls, &position, 0.0);
+        clearance.measure(&walls, &position, 0.0, None);
         assert!(clearance.clear(0, 0.03));
         let mut drift = [DVec3::ZERO];
         let mut lost = Vec::new();

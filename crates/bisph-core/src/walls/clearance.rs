@@ -17,6 +17,7 @@
 use super::Walls;
 use crate::bodies::Motion;
 use crate::dim::Vector;
+use crate::neighbours::CandidateRows;
 use rayon::prelude::*;
 
 /// Relative allowance on an element's reach (the bounce's own test allows `1e-6`).
@@ -61,16 +62,31 @@ impl<V: Vector> WallClearance<V> {
     /// Measures the bounds at `points`; `slack` is how far a particle may move before the
     /// caller measures again or [`WallClearance::forget`]s them. Points behind a wall within a
     /// cell less the largest reach ([`Walls::signed_distance`] positive) get no bounds, nor
-    /// does any point where elements stretch with a piston.
-    pub fn measure(&mut self, walls: &Walls<V>, points: &[V], slack: f64) {
+    /// does any point where elements stretch with a piston. `rows`, when given, lists for the
+    /// first points the elements within its listing radius of them (built at `points`, no
+    /// wider than a cell of the wall grid): those points look at their rows instead of the
+    /// grid's cells, and the ceiling is the listing radius less the largest reach (no
+    /// element left out can come closer).
+    pub fn measure(
+        &mut self,
+        walls: &Walls<V>,
+        points: &[V],
+        slack: f64,
+        rows: Option<&CandidateRows<V>>,
+    ) {
         if !walls.stretch.is_empty() {
             self.forget();
             return;
         }
         let (elements, grid) = (&walls.elements, &walls.grid);
         let reach = |j: usize| elements.reach[j] * (1.0 + REACH_ALLOWANCE);
-        let far = grid.cell_size() - elements.max_reach * (1.0 + REACH_ALLOWANCE);
-        let behind_search = far.max(0.5 * grid.cell_size());
+        let allowed_reach = elements.max_reach * (1.0 + REACH_ALLOWANCE);
+        let behind_search = (grid.cell_size() - allowed_reach).max(0.5 * grid.cell_size());
+        let listed = rows.map_or(0, |rows| rows.len());
+        let cell = rows.map_or(grid.cell_size(), |rows| {
+            grid.cell_size().min(rows.listing_radius())
+        });
+        let far = cell - allowed_reach;
         let moving: Vec<bool> = walls
             .bodies
             .iter()
@@ -79,26 +95,31 @@ impl<V: Vector> WallClearance<V> {
         let moves = |j: usize| moving[elements.body[j] as usize];
         self.fixed_bound.resize(points.len(), 0.0);
         self.moving_bound.resize(points.len(), 0.0);
+        let centres = &elements.centre;
         self.fixed_bound
             .par_iter_mut()
             .zip(self.moving_bound.par_iter_mut())
             .zip(points.par_iter())
+            .enumerate()
             .with_min_len(1024)
-            .for_each(|((fixed, moving), &x)| {
+            .for_each(|(i, ((fixed, moving), &x))| {
                 (*fixed, *moving) = (far, far);
-                if grid.no_candidates(x) {
-                    return;
-                }
-                grid.for_each_candidate_shifted(x, |j, shift| {
-                    let d = (x - elements.centre[j] - shift).length() - reach(j);
+                // `r` runs from element `j`'s centre to `x`.
+                let mut visit = |j: usize, r: V| {
+                    let d = r.length() - reach(j);
                     if moves(j) {
                         *moving = moving.min(d);
                     } else if d < *fixed {
-                        let r = x - elements.centre[j] - shift;
                         let disc = distance_to_disc(r, elements.normal[j], reach(j));
                         *fixed = fixed.min((disc - REACH_ALLOWANCE * elements.reach[j]).max(d));
                     }
-                });
+                };
+                match rows.filter(|_| i < listed) {
+                    Some(rows) => rows.for_each_listed(i, x, centres, |j, r_xj| visit(j, -r_xj)),
+                    None if grid.no_candidates(x) => return,
+                    None => grid
+                        .for_each_candidate_shifted(x, |j, shift| visit(j, x - centres[j] - shift)),
+                }
                 if fixed.min(*moving) < far
                     && walls.may_be_behind(x, behind_search)
                     && walls
@@ -261,7 +282,7 @@ mod tests {
         let points = scattered_points();
         let mut clearance = WallClearance::default();
         assert!(!clearance.clear(0, 0.0));
-        clearance.measure(&walls, &points, 0.0);
+        clearance.measure(&walls, &points, 0.0, None);
         let mut clear = 0;
         for (i, &x) in points.iter().enumerate() {
             let distance = distance_to_elements(&walls, x);
@@ -285,10 +306,48 @@ mod tests {
         }
         assert!(clear > 900, "{clear} points clear by 0.05");
         let centre = [DVec3::splat(0.5)];
-        clearance.measure(&walls, &centre, 0.1);
+        clearance.measure(&walls, &centre, 0.1, None);
         assert!(clearance.clear(0, 0.05) && !clearance.clear(0, 0.2));
         clearance.forget();
         assert!(!clearance.clear(0, 0.0));
+    }
+
+    /// Bounds measured from candidate rows listed one wall-grid cell wide are the bounds
+    /// measured from the grid's cells, bit for bit, for the points the rows list and for
+    /// those beyond them (the grid then serves); rows listed narrower lower the ceiling to
+    /// their listing radius less the largest reach, and the bounds stay below the distances.
+    #[test]
+    fn rows_give_the_bounds_of_the_grid() {
+        let walls = open_box();
+        let points = scattered_points();
+        let listed = points.len() / 2;
+        let mut from_grid = WallClearance::default();
+        from_grid.measure(&walls, &points, 0.0, None);
+        let centres = &walls.elements.centre;
+        let mut rows = CandidateRows::default();
+        rows.rebuild(&walls.grid, &points[..listed], centres, 0.2, 0.05);
+        let mut from_rows = WallClearance::default();
+        from_rows.measure(&walls, &points, 0.0, Some(&rows));
+        let bits = |c: &WallClearance<DVec3>| c.fixed_bound.iter().map(|b| b.to_bits()).collect();
+        let grid_bits: Vec<u64> = bits(&from_grid);
+        assert_eq!(grid_bits, bits(&from_rows));
+        rows.rebuild(&walls.grid, &points[..listed], centres, 0.1, 0.05);
+        from_rows.measure(&walls, &points, 0.0, Some(&rows));
+        let ceiling = rows.listing_radius() - walls.elements.max_reach * (1.0 + 1e-5);
+        let mut lowered = 0;
+        for (i, &x) in points.iter().enumerate() {
+            let bound = from_rows.fixed_bound[i];
+            let distance = distance_to_elements(&walls, x);
+            assert!(
+                bound <= distance && bound <= ceiling,
+                "{x}: {bound}, {distance}"
+            );
+            // Points behind a wall beyond the lowered ceiling hold it as their bound.
+            let grid_bound = from_grid.fixed_bound[i];
+            assert!(bound <= grid_bound || grid_bound == f64::NEG_INFINITY);
+            lowered += usize::from(bound < grid_bound);
+        }
+        assert!(lowered > 500, "{lowered} bounds lowered");
     }
 
     /// A point behind a wall (out of the box, as water that went over its rim) is never
@@ -298,7 +357,7 @@ mod tests {
         let walls = open_box();
         let points = [DVec3::new(-0.1, 0.5, 0.5), DVec3::new(0.1, 0.5, 0.5)];
         let mut clearance = WallClearance::default();
-        clearance.measure(&walls, &points, 0.0);
+        clearance.measure(&walls, &points, 0.0, None);
         assert!(
             !clearance.clear(0, 0.0),
             "behind: {}",
@@ -321,7 +380,7 @@ mod tests {
         let at_rest = open_box();
         let points = scattered_points();
         let mut clearance = WallClearance::default();
-        clearance.measure(&walls, &points, 0.0);
+        clearance.measure(&walls, &points, 0.0, None);
         let margin = 0.02;
         let clear_at = |clearance: &WallClearance<DVec3>| {
             (0..points.len())
