@@ -120,6 +120,11 @@ impl<V: Vector> WallModel<V> for ShepardWalls<V> {
         let mut pressure_gradient = V::ZERO;
         let mut velocity_divergence = 0.0;
         let radius = self.quadrature.reach(kernel.support, elements.max_reach);
+        // Elements beyond the Gauss points' reach give exactly zero.
+        let radius = match self.quadrature {
+            BoundaryQuadrature::Gauss => radius.min(elements.gauss_reach(kernel.support)),
+            _ => radius,
+        };
         near.for_each(a.index, x, &elements.centre, radius, |k, _, r| {
             let ws = match self.quadrature {
                 BoundaryQuadrature::Centre => kernel.value(r) * elements.area[k],
