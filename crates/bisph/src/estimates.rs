@@ -88,10 +88,9 @@ pub const ESTIMATES: &[Estimate] = &[
     e("floating-box-2d", Measured(16.2), Scaled(16.2 * 12.0)),
     e("floating-box-held-2d", Measured(3.6), Measured(13.9)),
     // dx 0.55/45 (364,500 particles, 80,200 elements) to 6 s: about 49,100 steps on 2
-    // threads at 0.59 s per step at t = 1.39-1.44 s (a window of the run), a step 1.18
-    // times faster late in the flow since the explicit sweep in vector lanes (measured at
-    // dx = 0.55/20; docs/performance.md), taken for the rest: 0.5 s per step.
-    e("spheric-test2", Measured(17.6), Scaled(0.5 * 49_100.0)),
+    // threads at 0.425 s per step over 236 steps from t = 1.32 s (docs/performance.md),
+    // taken for the rest.
+    e("spheric-test2", Measured(17.6), Scaled(0.425 * 49_100.0)),
     // The paper's setting, one run (500,000 particles) to 0.22 s: 2,750 steps, 3,538 s on 2
     // threads for the whole validation (docs/validation-report/full/report.md).
     e("apollo", Measured(75.7), Measured(3_538.0)),
