@@ -70,9 +70,9 @@ pub struct BoundaryElements<V: Vector> {
     gauss_groups: Vec<crate::bi::gauss::PointGroup>,
     /// Offsets into `gauss_groups` (length = elements + 1).
     gauss_start: Vec<u32>,
-    /// Largest distance from an element's centre to a point of its Gauss rule (at most
-    /// [`BoundaryElements::max_reach`]): no point of the rules of the elements whose centres
-    /// lie farther than the support plus this from a particle is in its support.
+    /// Largest distance from an element's centre to a point of its Gauss rule: no point of
+    /// the rule of an element whose centre lies farther than the support plus this from a
+    /// particle is in its support.
     max_gauss_reach: f64,
     /// Merged wall pieces and per-cell candidate lists for the geometric Shepard factor
     /// (empty until [`Walls::prepare_gamma`]; rebuilt whenever the walls are placed).
@@ -131,11 +131,11 @@ impl<V: Vector> BoundaryElements<V> {
         self.gauss_start.push(self.gauss_groups.len() as u32);
     }
 
-    /// The farthest an element's centre can lie from a particle at `x` for its Gauss rule
-    /// ([`BoundaryElements::gauss_integral`]) to give the particle other than zero: the
-    /// support plus the largest distance from a centre to a Gauss point, widened by `1e-9`
-    /// of itself so that every point of the rule of an element farther off is beyond the
-    /// support after rounding.
+    /// The farthest an element's centre can lie from a particle for its Gauss rule
+    /// ([`BoundaryElements::gauss_integral`]) to give the particle other than zero, with
+    /// kernel support `support`: the support plus the largest distance from a centre to a
+    /// Gauss point, widened by `1e-9` of itself so that every point of the rule of an element
+    /// farther off is beyond the support after rounding.
     pub fn gauss_reach(&self, support: f64) -> f64 {
         (support + self.max_gauss_reach) * (1.0 + 1e-9)
     }
