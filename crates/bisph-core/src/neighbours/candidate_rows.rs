@@ -111,11 +111,7 @@ impl<V: Vector> CandidateRows<V> {
     /// that order.
     pub fn retain_queries(&mut self, kept: &[u32]) {
         let old = std::mem::take(&mut self.blocks);
-        let row = |i: usize| {
-            let block = &old[i / Self::BLOCK];
-            let k = i % Self::BLOCK;
-            &block.index[block.start[k] as usize..block.start[k + 1] as usize]
-        };
+        let row = |i: usize| Self::row_of(&old, i);
         self.blocks = kept
             .par_chunks(Self::BLOCK)
             .map(|queries| {
@@ -177,19 +173,34 @@ impl<V: Vector> CandidateRows<V> {
     /// # Panics
     /// When `i` is not a listed query.
     pub fn for_each_listed(&self, i: usize, x: V, points: &[V], mut visit: impl FnMut(usize, V)) {
-        let block = &self.blocks[i / Self::BLOCK];
-        let k = i % Self::BLOCK;
         let periodic = self.period.any();
-        for &j in &block.index[block.start[k] as usize..block.start[k + 1] as usize] {
-            let d = points[j as usize] - x;
-            visit(
-                j as usize,
-                if periodic {
-                    self.period.minimum_image(d)
-                } else {
-                    d
-                },
-            );
+        for &j in self.row(i) {
+            visit(j as usize, self.offset(periodic, x, points[j as usize]));
+        }
+    }
+
+    /// The candidates of query `i`, in the order of the grid search at the build.
+    #[inline(always)]
+    fn row(&self, i: usize) -> &[u32] {
+        Self::row_of(&self.blocks, i)
+    }
+
+    /// The candidates of query `i` in the row blocks `blocks`.
+    #[inline(always)]
+    fn row_of(blocks: &[RowBlock], i: usize) -> &[u32] {
+        let block = &blocks[i / Self::BLOCK];
+        let k = i % Self::BLOCK;
+        &block.index[block.start[k] as usize..block.start[k + 1] as usize]
+    }
+
+    /// `r_ij = p - x`, its minimum image where `periodic` (the rows' periodic axes).
+    #[inline(always)]
+    fn offset(&self, periodic: bool, x: V, p: V) -> V {
+        let d = p - x;
+        if periodic {
+            self.period.minimum_image(d)
+        } else {
+            d
         }
     }
 
@@ -216,25 +227,14 @@ impl<V: Vector> CandidateRows<V> {
         visit: impl FnMut(usize, V, f64),
     ) {
         debug_assert!(radius <= self.reach, "a search beyond the listed reach");
-        let block = &self.blocks[i / Self::BLOCK];
-        let k = i % Self::BLOCK;
-        let candidates = &block.index[block.start[k] as usize..block.start[k + 1] as usize];
         let r2max = radius * radius;
         let periodic = self.period.any();
         let mut kept = KeptBlock::<V>::new();
         let mut visit = one_at_a_time(visit);
-        for chunk in candidates.chunks(KEPT_BLOCK) {
-            let offsets = chunk.iter().map(|&j| {
-                let d = points[j as usize] - x;
-                (
-                    j,
-                    if periodic {
-                        self.period.minimum_image(d)
-                    } else {
-                        d
-                    },
-                )
-            });
+        for chunk in self.row(i).chunks(KEPT_BLOCK) {
+            let offsets = chunk
+                .iter()
+                .map(|&j| (j, self.offset(periodic, x, points[j as usize])));
             let n = kept.filter(offsets, r2max);
             visit(&kept.index[..n], &kept.offset[..n], &kept.r2[..n]);
         }

@@ -39,33 +39,66 @@ use crate::walls::shepard::ShepardKind;
 use rayon::prelude::*;
 
 impl<V: Vector> Simulation<V> {
-    /// One semi-implicit midpoint step of size `dt`.
+    /// One semi-implicit midpoint step of size `dt`: the rates at the midpoint by fixed-point
+    /// iteration with the positions frozen, then the bodies and the fluid advanced with them.
     pub(super) fn midpoint_step(
         &mut self,
         dt: f64,
         params: &MidpointParams,
     ) -> Result<(), SimError> {
+        self.walls.set_velocities_at(self.time + 0.5 * dt);
+        let body_start = self.walls.dynamic_velocities();
+        self.extrapolate_rates(dt);
+        // Positions and grid stay frozen through the iterations: list the pairs once.
+        if params.max_iterations > 1 {
+            self.list_pairs();
+        }
+        let (iterations, residue) = self.iterate_midpoint_rates(dt, &body_start, params);
+        self.forget_pairs();
+        self.last_iterations = iterations;
+        self.last_residue = residue;
+        self.wall_work += dt * self.wall_power;
+        self.viscous_dissipation += dt * self.viscous_power;
+        self.diffusion_dissipation += dt * self.diffusion_power;
+        self.advance_midpoint_bodies(dt, &body_start);
+        self.advance_midpoint_fluid(dt);
+        self.wrap_positions();
+        self.time += dt;
+        self.step += 1;
+        self.last_dt = dt;
+        self.check_state()?;
+        self.move_walls();
+        self.step_neighbours();
+        self.place_geometric_gamma();
+        self.refresh_pressure();
+        Ok(())
+    }
+
+    /// Steps 1-4 of the module's iteration from the first guess in the rates: the state and
+    /// the bodies' velocities `body_start + dt/2 A` at the midpoint, the rates there, the
+    /// residue and the relaxation (or Anderson's mixing), until the residue falls below the
+    /// tolerance or `max_iterations` have run. Leaves the last rates in the fluid and the
+    /// bodies; returns the iterations run and the last residue.
+    fn iterate_midpoint_rates(
+        &mut self,
+        dt: f64,
+        body_start: &[f64],
+        params: &MidpointParams,
+    ) -> (u32, f64) {
         let half = 0.5 * dt;
         let t_mid = self.time + half;
-        self.walls.set_velocities_at(t_mid);
-        let body_start = self.walls.dynamic_velocities();
         let body_inertia = self.walls.dynamic_inertias();
-        let mut body_velocity = body_start.clone();
+        let mut body_velocity = body_start.to_vec();
         let mut relaxation = params.initial_relaxation;
         let mut previous_residue = f64::INFINITY;
         let mut iterations = 0;
         let mut residue = 0.0;
-        self.extrapolate_rates(dt);
         let depth = params.anderson_depth as usize;
         let mut anderson = std::mem::take(&mut self.scratch.anderson);
         if anderson.depth() != depth {
             anderson = Anderson::new(depth);
         }
         anderson.restart();
-        // Positions and grid stay frozen through the iterations: list the pairs once.
-        if params.max_iterations > 1 {
-            self.list_pairs();
-        }
         for m in 0..params.max_iterations.max(1) {
             iterations = m + 1;
             {
@@ -122,19 +155,19 @@ impl<V: Vector> Simulation<V> {
             }
         }
         self.scratch.anderson = anderson;
-        self.forget_pairs();
-        self.last_iterations = iterations;
-        self.last_residue = residue;
-        self.wall_work += dt * self.wall_power;
-        self.viscous_dissipation += dt * self.viscous_power;
-        self.diffusion_dissipation += dt * self.diffusion_power;
-        // Bodies: drift with the midpoint velocities, then V^{n+1} = V^n + dt A.
+        (iterations, residue)
+    }
+
+    /// The bodies after the iterations: they drift with `V^{n+1/2} = V^n + dt/2 A`
+    /// (`body_start` holding `V^n`), then `V^{n+1} = V^n + dt A`; staggered bodies take the
+    /// load of this step for the next one.
+    fn advance_midpoint_bodies(&mut self, dt: f64, body_start: &[f64]) {
+        let half = 0.5 * dt;
         let body_acceleration = self.walls.dynamic_accelerations();
-        for (k, v) in body_velocity.iter_mut().enumerate() {
-            *v = body_start[k] + half * body_acceleration[k];
-        }
+        let mut body_velocity: Vec<f64> = (body_start.iter().zip(&body_acceleration))
+            .map(|(&v, &a)| v + half * a)
+            .collect();
         self.walls.set_dynamic_velocities(&body_velocity);
-        // Staggered bodies take the load of this step for the next one.
         if self.walls.has_dynamic_bodies() {
             let loads = self.body_loads();
             self.walls.update_staggered(&loads);
@@ -144,8 +177,13 @@ impl<V: Vector> Simulation<V> {
             *v = body_start[k] + dt * body_acceleration[k];
         }
         self.walls.set_dynamic_velocities(&body_velocity);
+    }
 
-        // Corrector: u^{n+1} = u^n + dt a, drift (u^n + u^{n+1}) / 2.
+    /// The fluid's corrector: `u^{n+1} = u^n + dt a`, the drift with `(u^n + u^{n+1}) / 2`
+    /// (through the elastic bounce where it is on), the carried gamma along the drift, and
+    /// `rho^{n+1} = rho^n + dt rhodot`.
+    fn advance_midpoint_fluid(&mut self, dt: f64) {
+        let half = 0.5 * dt;
         let integrated_gamma = self.carried_gamma() == Some(ShepardKind::Integrated);
         let f = &mut self.fluid;
         let drift = &mut self.scratch.drift_velocity;
@@ -197,16 +235,6 @@ impl<V: Vector> Simulation<V> {
             let lost = &self.scratch.lost_energy;
             self.wall_work += self.sum_owned(|i| lost[i]);
         }
-        self.wrap_positions();
-        self.time += dt;
-        self.step += 1;
-        self.last_dt = dt;
-        self.check_state()?;
-        self.move_walls();
-        self.step_neighbours();
-        self.place_geometric_gamma();
-        self.refresh_pressure();
-        Ok(())
     }
 
     /// Under-relaxes the rates of an iteration towards those of the previous one:
