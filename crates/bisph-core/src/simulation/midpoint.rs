@@ -62,13 +62,7 @@ impl<V: Vector> Simulation<V> {
         self.diffusion_dissipation += dt * self.diffusion_power;
         self.advance_midpoint_bodies(dt, &body_start);
         self.advance_midpoint_fluid(dt);
-        self.wrap_positions();
-        self.time += dt;
-        self.step += 1;
-        self.last_dt = dt;
-        self.check_state()?;
-        self.move_walls();
-        self.step_neighbours();
+        self.close_step(dt)?;
         self.place_geometric_gamma();
         self.refresh_pressure();
         Ok(())

@@ -17,6 +17,20 @@ use crate::walls::bounce::elastic_bounce;
 use rayon::prelude::*;
 
 impl<V: Vector> Simulation<V> {
+    /// After a step's drift of `dt`: positions wrapped across periodic axes, the clock
+    /// advanced, the state checked, then the walls moved to the new time and the neighbour
+    /// structures brought to the new positions.
+    pub(super) fn close_step(&mut self, dt: f64) -> Result<(), SimError> {
+        self.wrap_positions();
+        self.time += dt;
+        self.step += 1;
+        self.last_dt = dt;
+        self.check_state()?;
+        self.move_walls();
+        self.step_neighbours();
+        Ok(())
+    }
+
     /// One explicit Verlet step of size `dt`.
     pub(super) fn verlet_step(&mut self, dt: f64) -> Result<(), SimError> {
         let half = 0.5 * dt;
@@ -69,17 +83,11 @@ impl<V: Vector> Simulation<V> {
         }
         self.walls.set_dynamic_velocities(&body_velocity);
         self.walls.drift_bodies(dt);
-        self.wrap_positions();
         let power_before = self.wall_power;
         let viscous_before = self.viscous_power;
         let diffusion_before = self.diffusion_power;
-        self.time += dt;
-        self.step += 1;
-        self.last_dt = dt;
-        self.check_state()?;
         // 2. walls, neighbours, rates at the predicted state.
-        self.move_walls();
-        self.step_neighbours();
+        self.close_step(dt)?;
         self.advance_gamma(dt);
         if summation {
             self.summation_densities(dt);
