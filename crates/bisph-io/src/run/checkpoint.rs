@@ -931,13 +931,25 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// The payload of layout `format`: the case, the state, the run counters, the histories, the
+/// settling report, then the state's fields added in later layouts (see [`decode_payload`]).
 fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
-    let has_earlier_rates = format >= 5;
-    let has_neighbour_origin = format >= 6;
     let mut w = Writer(Vec::new());
     w.str(&c.case_source);
     w.str(&c.case_text);
-    let s = &c.sim;
+    write_state(&mut w, &c.sim, format);
+    write_run(&mut w, &c.run);
+    write_histories(&mut w, c, format);
+    if format >= 7 {
+        write_settling(&mut w, c.settling.as_ref());
+    }
+    write_later_state(&mut w, &c.sim, format);
+    w.0
+}
+
+/// The state's clock, books, fluid, walls and bodies.
+fn write_state<V: Vector>(w: &mut Writer, s: &SimState<V>, format: u32) {
+    let has_earlier_rates = format >= 5;
     w.f64(s.time);
     w.u64(s.step);
     w.f64(s.last_dt);
@@ -972,7 +984,7 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
         w.vectors(&f.earlier_acceleration);
         w.f64s(&f.earlier_density_rate);
     }
-    if has_neighbour_origin {
+    if format >= 6 {
         w.vectors(&s.neighbour_origin);
     }
     w.vectors(&s.centre);
@@ -997,7 +1009,10 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
             w.f64(x);
         }
     }
-    let r = &c.run;
+}
+
+/// The run loop's counters.
+fn write_run(w: &mut Writer, r: &RunCounters) {
     w.f64(r.next_series);
     w.f64(r.next_frame);
     w.f64s(&r.frame_times);
@@ -1019,6 +1034,10 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
         w.u64(l);
     }
     w.f64(r.fluid_body_max);
+}
+
+/// The energy and probe rows so far.
+fn write_histories<V: Vector>(w: &mut Writer, c: &Checkpoint<V>, format: u32) {
     w.u64(c.history.len() as u64);
     let columns = energy_columns(format);
     for row in &c.history {
@@ -1030,22 +1049,29 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     for row in &c.probe_history {
         w.f64s(row);
     }
-    if format >= 7 {
-        match &c.settling {
-            None => w.u32(0),
-            Some(s) => {
-                w.u32(1);
-                w.u64(s.steps);
-                w.f64s(&[
-                    s.time,
-                    s.max_speed,
-                    s.max_acceleration,
-                    s.max_displacement,
-                    s.wall_seconds,
-                ]);
-            }
+}
+
+/// The settling report: a flag, then the report when there is one.
+fn write_settling(w: &mut Writer, settling: Option<&SettleReport>) {
+    match settling {
+        None => w.u32(0),
+        Some(s) => {
+            w.u32(1);
+            w.u64(s.steps);
+            w.f64s(&[
+                s.time,
+                s.max_speed,
+                s.max_acceleration,
+                s.max_displacement,
+                s.wall_seconds,
+            ]);
         }
     }
+}
+
+/// The state's fields added in layouts 8 (diffusion books), 9 (removed particles) and 10
+/// (the earliest rates).
+fn write_later_state<V: Vector>(w: &mut Writer, s: &SimState<V>, format: u32) {
     if format >= 8 {
         w.f64(s.diffusion_dissipation);
         w.f64(s.diffusion_power);
@@ -1056,18 +1082,46 @@ fn encode_payload<V: Vector>(c: &Checkpoint<V>, format: u32) -> Vec<u8> {
     }
     if format >= 10 {
         w.f64(s.earliest_dt);
-        w.vectors(&f.earliest_acceleration);
-        w.f64s(&f.earliest_density_rate);
+        w.vectors(&s.fluid.earliest_acceleration);
+        w.f64s(&s.fluid.earliest_density_rate);
     }
-    w.0
 }
 
+/// Reads a payload of layout `format` (the inverse of [`encode_payload`]); a payload with
+/// bytes left over is refused.
 fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>, String> {
-    let has_earlier_rates = format >= 5;
-    let has_neighbour_origin = format >= 6;
     let mut r = Reader { bytes, at: 0 };
     let case_source = r.str()?;
     let case_text = r.str()?;
+    let mut sim = read_state(&mut r, format)?;
+    let run = read_run(&mut r)?;
+    let (history, probe_history) = read_histories(&mut r, format)?;
+    let settling = if format >= 7 {
+        read_settling(&mut r)?
+    } else {
+        None
+    };
+    read_later_state(&mut r, &mut sim, format)?;
+    if r.at != bytes.len() {
+        return Err(format!(
+            "{} bytes left over after the payload",
+            bytes.len() - r.at
+        ));
+    }
+    Ok(Checkpoint {
+        case_source,
+        case_text,
+        sim,
+        run,
+        history,
+        probe_history,
+        settling,
+    })
+}
+
+/// See [`write_state`].
+fn read_state<V: Vector>(r: &mut Reader, format: u32) -> Result<SimState<V>, String> {
+    let has_earlier_rates = format >= 5;
     let mut s = SimState::<V> {
         time: r.f64()?,
         step: r.u64()?,
@@ -1113,7 +1167,7 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         },
         ..Fluid::default()
     };
-    if has_neighbour_origin {
+    if format >= 6 {
         s.neighbour_origin = r.vectors()?;
     }
     s.centre = r.vectors()?;
@@ -1137,6 +1191,11 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         }
         s.free_bodies.push((b, values));
     }
+    Ok(s)
+}
+
+/// See [`write_run`].
+fn read_run(r: &mut Reader) -> Result<RunCounters, String> {
     let mut run = RunCounters {
         next_series: r.f64()?,
         next_frame: r.f64()?,
@@ -1161,6 +1220,14 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         run.body_csv_lengths.push(r.u64()?);
     }
     run.fluid_body_max = r.f64()?;
+    Ok(run)
+}
+
+/// Energy rows and probe rows (see [`write_histories`]).
+type Histories = (Vec<[f64; ENERGY_COLUMNS]>, Vec<Vec<f64>>);
+
+/// See [`write_histories`].
+fn read_histories(r: &mut Reader, format: u32) -> Result<Histories, String> {
     let columns = energy_columns(format);
     let n = r.len(8 * columns)?;
     let mut history = Vec::with_capacity(n);
@@ -1176,15 +1243,20 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
     for _ in 0..n {
         probe_history.push(r.f64s()?);
     }
-    let settling = match (format >= 7).then(|| r.u32()).transpose()? {
-        None | Some(0) => None,
-        Some(1) => {
+    Ok((history, probe_history))
+}
+
+/// See [`write_settling`].
+fn read_settling(r: &mut Reader) -> Result<Option<SettleReport>, String> {
+    match r.u32()? {
+        0 => Ok(None),
+        1 => {
             let steps = r.u64()?;
             let v = r.f64s()?;
             let [time, max_speed, max_acceleration, max_displacement, wall_seconds] = v[..] else {
                 return Err(format!("{} settling values, expected 5", v.len()));
             };
-            Some(SettleReport {
+            Ok(Some(SettleReport {
                 steps,
                 time,
                 max_speed,
@@ -1192,10 +1264,18 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
                 max_displacement,
                 wall_seconds,
                 ..SettleReport::starting()
-            })
+            }))
         }
-        Some(flag) => return Err(format!("settling flag {flag}, expected 0 or 1")),
-    };
+        flag => Err(format!("settling flag {flag}, expected 0 or 1")),
+    }
+}
+
+/// See [`write_later_state`].
+fn read_later_state<V: Vector>(
+    r: &mut Reader,
+    s: &mut SimState<V>,
+    format: u32,
+) -> Result<(), String> {
     if format >= 8 {
         s.diffusion_dissipation = r.f64()?;
         s.diffusion_power = r.f64()?;
@@ -1209,21 +1289,7 @@ fn decode_payload<V: Vector>(bytes: &[u8], format: u32) -> Result<Checkpoint<V>,
         s.fluid.earliest_acceleration = r.vectors()?;
         s.fluid.earliest_density_rate = r.f64s()?;
     }
-    if r.at != bytes.len() {
-        return Err(format!(
-            "{} bytes left over after the payload",
-            bytes.len() - r.at
-        ));
-    }
-    Ok(Checkpoint {
-        case_source,
-        case_text,
-        sim: s,
-        run,
-        history,
-        probe_history,
-        settling,
-    })
+    Ok(())
 }
 
 /// The whole file's bytes.
